@@ -1,0 +1,195 @@
+"""Typed, immutable description of a turbine (the in-memory form of a turbine YAML file).
+
+Units are SI throughout: metres, kilograms, seconds, radians, newtons.
+
+Frames (Patil, Lee & Hodges 2001, and docs/theory.md):
+- tower T: fixed; ``t1 = y1`` points up along the yaw axis (gravity acts along ``-t1``).
+- nacelle Y: yaws about ``y1`` by ``qy``; ``y3`` is the (untilted) shaft direction.
+- shaft S: spins about ``s3`` at the prescribed rotor speed; azimuth ``psi = Omega0 t``,
+  at ``t = 0`` blade 1 points up (``s1 = y1``).
+- hub H: teeters about ``h2 = s2`` (``h1 = cos qh s1 + sin qh s3``).
+- blade k (k = 0..Nb-1) root frame b: ``b1`` spanwise outward, ``b2`` in the plane of rotation
+  towards the direction of motion, ``b3`` along the shaft (flap).  Blade k's root frame is blade
+  0's turned by ``2 pi k / Nb`` about ``h3``, then by the precone about its own ``b2``.
+
+Cross-sectional properties are given at spanwise stations and interpolated linearly.
+Section matrices use the ordering ``[F1, F2, F3, M1, M2, M3]`` (stiffness) and
+``[V1, V2, V3, Omega1, Omega2, Omega3]`` (mass), expressed in the reference cross-section
+frame b (reference line = the elastic/reference axis).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Optional
+
+import numpy as np
+
+#: Names of the optional flexible directions (None = rigid in that direction).
+FLEXIBLE_DIRECTIONS = ("ea", "ga2", "ga3")
+
+
+def _frozen_array(a, ndim=None) -> np.ndarray:
+    arr = np.array(a, dtype=float)
+    if ndim is not None and arr.ndim != ndim:
+        raise ValueError(f"expected a {ndim}-d array, got shape {arr.shape}")
+    arr.setflags(write=False)
+    return arr
+
+
+@dataclass(frozen=True, eq=False)
+class SectionTable:
+    """Spanwise cross-sectional properties of a beam (blade or tower).
+
+    ``stations`` are fractions of the beam length, strictly increasing from 0 to 1.
+    Every property array has one value per station.
+
+    Attributes (per station):
+        mass: mass per unit length m [kg/m].
+        i1, i2, i3: mass moments of inertia per unit length about b1 (torsion, ``I1 = I2 + I3``
+            for a thin section), b2 (flap axis) and b3 (lead-lag axis) [kg m].
+        gj: torsional rigidity [N m^2]; ei2: flap bending rigidity (about b2) [N m^2];
+            ei3: lead-lag bending rigidity (about b3) [N m^2].
+        ea, ga2, ga3: axial and shear rigidities [N]; ``None`` means rigid (zero compliance,
+            the paper's inextensible, shear-rigid blade).
+        twist: structural twist [rad]: the principal axes of the section properties are
+            turned by this angle about b1 (positive from b2 towards b3); the reference frame
+            itself stays untwisted.
+        cg_offset: (x2, x3) of the mass centre from the reference line [m], shape (ns, 2).
+        tension_offset: (x2, x3) of the tension centre (where EA acts) [m], shape (ns, 2).
+        stiffness_6x6 / mass_6x6: optional full matrices, shape (ns, 6, 6), in frame b; when
+            given they replace the matrices built from the scalar properties above.
+    """
+
+    stations: np.ndarray
+    mass: np.ndarray
+    i1: np.ndarray
+    i2: np.ndarray
+    i3: np.ndarray
+    gj: np.ndarray
+    ei2: np.ndarray
+    ei3: np.ndarray
+    ea: Optional[np.ndarray] = None
+    ga2: Optional[np.ndarray] = None
+    ga3: Optional[np.ndarray] = None
+    twist: Optional[np.ndarray] = None
+    cg_offset: Optional[np.ndarray] = None
+    tension_offset: Optional[np.ndarray] = None
+    stiffness_6x6: Optional[np.ndarray] = None
+    mass_6x6: Optional[np.ndarray] = None
+
+    def __post_init__(self):
+        for name in ("stations", "mass", "i1", "i2", "i3", "gj", "ei2", "ei3"):
+            object.__setattr__(self, name, _frozen_array(getattr(self, name), 1))
+        for name in ("ea", "ga2", "ga3", "twist"):
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, _frozen_array(getattr(self, name), 1))
+        for name in ("cg_offset", "tension_offset"):
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, _frozen_array(getattr(self, name), 2))
+        for name in ("stiffness_6x6", "mass_6x6"):
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, _frozen_array(getattr(self, name), 3))
+
+    @property
+    def n_stations(self) -> int:
+        return len(self.stations)
+
+    def rigid_directions(self) -> tuple:
+        """Names among ('ea', 'ga2', 'ga3') that are rigid (not given)."""
+        if self.stiffness_6x6 is not None:
+            return tuple(n for k, n in enumerate(FLEXIBLE_DIRECTIONS)
+                         if not np.all(np.isfinite(self.stiffness_6x6[:, k, k])))
+        return tuple(n for n in FLEXIBLE_DIRECTIONS if getattr(self, n) is None)
+
+    @classmethod
+    def uniform(cls, **props) -> "SectionTable":
+        """A uniform table (two stations, 0 and 1) from scalar properties."""
+        out = {"stations": [0.0, 1.0]}
+        for k, v in props.items():
+            out[k] = None if v is None else [v, v]
+        return cls(**out)
+
+
+@dataclass(frozen=True, eq=False)
+class Beam:
+    """A flexible beam: length [m], section table and number of finite elements."""
+
+    length: float
+    sections: SectionTable
+    elements: int = 4
+
+
+@dataclass(frozen=True)
+class Hub:
+    """Hub: blade roots at ``radius`` (e) from the shaft axis along h1.
+
+    ``undersling`` (lhd1) [m] moves the blade roots from the teeter axis along -h3 (the sign
+    of the paper's Eq. 11). ``teeter`` False makes the hub rigid on the shaft.
+    ``inertia_lateral`` (Ihlat, about h1 and h2) and ``inertia_longitudinal`` (Ihlong, about h3)
+    [kg m^2]; teeter spring [N m/rad] and damper [N m s/rad]; hub ``mass`` [kg] (only matters
+    with gravity).
+    """
+
+    radius: float = 1.8
+    undersling: float = 0.0
+    teeter: bool = True
+    inertia_lateral: float = 50.0
+    inertia_longitudinal: float = 5.0
+    teeter_stiffness: float = 0.0
+    teeter_damping: float = 0.0
+    mass: float = 0.0
+
+
+@dataclass(frozen=True)
+class Nacelle:
+    """Nacelle: yaw bearing on the tower top.
+
+    ``yaw_inertia`` (Iy) [kg m^2] is the inertia about the yaw axis of everything but the
+    blades, hub included (so the nacelle body alone carries Iy - Ihlat);
+    ``yaw_to_teeter`` (d) [m] is the distance from the yaw axis to the teeter axis along the
+    shaft; ``shaft_tilt`` [rad]; ``yaw_free`` False locks the yaw bearing; ``mass`` [kg].
+    """
+
+    yaw_inertia: float = 16599.0
+    yaw_stiffness: float = 0.0
+    yaw_damping: float = 0.0
+    yaw_to_teeter: float = 2.388
+    shaft_tilt: float = 0.0
+    yaw_free: bool = True
+    mass: float = 0.0
+
+
+@dataclass(frozen=True)
+class Rotor:
+    """Rotor speed Omega0 [rad/s], blade count and precone [rad]."""
+
+    speed: float = 6.02
+    blades: int = 2
+    precone: float = 0.0
+
+
+@dataclass(frozen=True)
+class Gravity:
+    enabled: bool = False
+    g: float = 9.81
+
+
+@dataclass(frozen=True, eq=False)
+class Turbine:
+    """A whole turbine. ``tower`` None means a rigid tower (the paper's example)."""
+
+    name: str
+    rotor: Rotor
+    hub: Hub
+    nacelle: Nacelle
+    blade: Beam
+    tower: Optional[Beam] = None
+    gravity: Gravity = field(default_factory=Gravity)
+
+    def with_rotor_speed(self, speed: float) -> "Turbine":
+        from dataclasses import replace
+        return replace(self, rotor=replace(self.rotor, speed=float(speed)))
+
+    def with_elements(self, n: int) -> "Turbine":
+        from dataclasses import replace
+        return replace(self, blade=replace(self.blade, elements=int(n)))
