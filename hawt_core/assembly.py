@@ -1,0 +1,248 @@
+"""The coupled turbine: one residual ``R(ydot, y, t) = 0`` for rigid bodies and flexible blades.
+
+Coupling (paper, "Coupling of Subsystems"): the blades are clamped to the hub, so their root
+frames move with the velocity ``v`` and angular velocity ``omega`` that the rigid-body
+kinematics give; the root section loads ``F0, M0`` of each blade (unknowns of the beam
+equations, the loads the blade exerts on the hub) enter Kane's dynamical equations of the
+rigid bodies.
+
+Unknowns: ``[q (rigid coordinates), u (rigid generalized speeds), blade 0, ..., blade Nb-1]``
+where each blade block is BeamElements' layout (see fem/beam.py). Rows: ``[rigid kinematics,
+rigid dynamics, blade 0 rows, ...]``. ``StateLayout`` gives names to all of it.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Optional
+
+import numpy as np
+import scipy.sparse as sp
+
+from .blade_modes import ConvergenceError, newton
+from .fem.beam import BLOCK_SIZE, ROOT_SIZE, BeamElements, F_, M_, OM_, TH_, U_, V_
+from .fem.sections import mesh_beam
+from .jacobian import ColouredJacobian, block_tridiagonal_pattern
+from .model import Turbine
+from .rigid import RigidSystem
+
+
+@dataclass(frozen=True)
+class BladeLayout:
+    """Index arrays of one blade's unknowns in the turbine state vector.
+
+    ``u``, ``theta``: (N+1, 3), row 0 is -1 (clamped root, not an unknown);
+    ``V``, ``Omega``: (N+1, 3); ``F``, ``M``: (N, 3); ``root_force``, ``root_moment``: (3,).
+    """
+
+    u: np.ndarray
+    theta: np.ndarray
+    V: np.ndarray
+    Omega: np.ndarray
+    F: np.ndarray
+    M: np.ndarray
+    root_force: np.ndarray
+    root_moment: np.ndarray
+
+
+class StateLayout:
+    """Names for the turbine state vector: ``layout["teeter"]`` (an int index),
+    ``layout.blade(k)`` (a BladeLayout), ``layout.names()`` (one name per unknown)."""
+
+    def __init__(self, rigid: RigidSystem, n_blades: int, beam: BeamElements):
+        self.rigid_names = tuple(rigid.coordinates) + tuple(rigid.speeds)
+        self.n_rigid = len(self.rigid_names)
+        self.n_blades = n_blades
+        self.n_beam = beam.n
+        self.N = beam.N
+        self.n = self.n_rigid + n_blades * beam.n
+        self._index = {name: i for i, name in enumerate(self.rigid_names)}
+        aliases = {"yaw_rate": ("yaw_rate", "yaw_speed"), "teeter_rate": ("teeter_speed",)}
+        for alias, names in aliases.items():
+            for nm in names:
+                if nm in self._index:
+                    self._index.setdefault(alias, self._index[nm])
+        self._blades = [self._blade_layout(k) for k in range(n_blades)]
+
+    def _blade_layout(self, k: int) -> BladeLayout:
+        off = self.blade_offset(k)
+        N = self.N
+        blk = off + ROOT_SIZE + np.arange(N * BLOCK_SIZE).reshape(N, BLOCK_SIZE)
+        neg = -np.ones((1, 3), int)
+        return BladeLayout(
+            u=np.concatenate([neg, blk[:, U_]]), theta=np.concatenate([neg, blk[:, TH_]]),
+            V=np.concatenate([off + 6 + np.arange(3)[None], blk[:, V_]]),
+            Omega=np.concatenate([off + 9 + np.arange(3)[None], blk[:, OM_]]),
+            F=blk[:, F_], M=blk[:, M_], root_force=off + np.arange(3),
+            root_moment=off + 3 + np.arange(3))
+
+    def blade_offset(self, k: int) -> int:
+        return self.n_rigid + k * self.n_beam
+
+    def blade(self, k: int) -> BladeLayout:
+        if not 0 <= k < self.n_blades:
+            raise IndexError(f"blade: {k} is not allowed; this turbine has blades 0..{self.n_blades - 1}")
+        return self._blades[k]
+
+    def __contains__(self, name: str) -> bool:
+        return name in self._index
+
+    def __getitem__(self, name: str) -> int:
+        try:
+            return self._index[name]
+        except KeyError:
+            raise KeyError(f"state name: {name!r} is not in this model; available: "
+                           f"{sorted(self._index)}") from None
+
+    def names(self) -> list:
+        out = list(self.rigid_names)
+        for k in range(self.n_blades):
+            bl = self._blades[k]
+            loc = [""] * self.n_beam
+            off = self.blade_offset(k)
+            for field in ("u", "theta", "V", "Omega", "F", "M"):
+                idx = getattr(bl, field)
+                for i, row in enumerate(idx):
+                    for c, j in enumerate(row):
+                        if j >= 0:
+                            lbl = f"{field}[{i + (field in ('F', 'M'))}]" if field in ("F", "M") \
+                                else f"{field}[{i}]"
+                            loc[j - off] = f"blade{k}.{lbl}.{c + 1}"
+            for c in range(3):
+                loc[c] = f"blade{k}.root_force.{c + 1}"
+                loc[3 + c] = f"blade{k}.root_moment.{c + 1}"
+            out += loc
+        return out
+
+
+class TurbineModel:
+    """Rigid nacelle/hub (Kane) + flexible blades (mixed beam elements), one residual.
+
+    ``elements`` overrides the blade's element count; ``rotor_speed`` the rotor speed.
+    """
+
+    def __init__(self, turbine: Turbine, elements: Optional[int] = None,
+                 rotor_speed: Optional[float] = None):
+        if rotor_speed is not None:
+            turbine = turbine.with_rotor_speed(rotor_speed)
+        if elements is not None:
+            turbine = turbine.with_elements(elements)
+        if turbine.tower is not None:
+            raise NotImplementedError("tower: a flexible tower is not supported yet; "
+                                      "omit it (rigid tower)")
+        self.turbine = turbine
+        self.rotor_speed = float(turbine.rotor.speed)
+        self.period = 2 * np.pi / self.rotor_speed if self.rotor_speed > 0 else np.inf
+        self.rigid = RigidSystem(turbine)
+        self.beam = BeamElements(mesh_beam(turbine.blade))
+        self.n_blades = int(turbine.rotor.blades)
+        self.nq, self.nu = self.rigid.n_q, self.rigid.n_u
+        self.layout = StateLayout(self.rigid, self.n_blades, self.beam)
+        self.n = self.layout.n
+        self.differential = np.concatenate(
+            [np.ones(self.nq + self.nu, bool), np.tile(self.beam.differential, self.n_blades)])
+        self.gravity = bool(turbine.gravity.enabled)
+        self._jac = ColouredJacobian(self.sparsity())
+
+    # ------------------------------------------------------------------ residual
+    def residual(self, ydot, y, t):
+        """R(ydot, y, t) (n,): rigid kinematics, rigid dynamics, blades. Complex-safe."""
+        nq, nu, nr = self.nq, self.nu, self.nq + self.nu
+        q, u = y[:nq], y[nq:nr]
+        qd, ud = ydot[:nq], ydot[nq:nr]
+        yb = y[nr:].reshape(self.n_blades, self.beam.n)
+        ydb = ydot[nr:].reshape(self.n_blades, self.beam.n)
+        v, w = self.rigid.root_motion(q, u, t)
+        g = self.rigid.gravity_in_root(q, t) if self.gravity else None
+        rb = self.beam.residual(ydb, yb, v, w, g)
+        rk = self.rigid.kinematics(q, qd, u, t)
+        rd = self.rigid.dynamics(q, u, ud, t, yb[:, 0:3], yb[:, 3:6])
+        return np.concatenate([np.atleast_1d(rk), np.atleast_1d(rd), rb.ravel()])
+
+    def sparsity(self) -> sp.csr_matrix:
+        """Structural pattern of dR/dy and dR/dydot (an over-estimate at block level)."""
+        nr = self.nq + self.nu
+        blade = block_tridiagonal_pattern(self.beam.pattern_blocks())
+        P = sp.lil_matrix((self.n, self.n), dtype=bool)
+        P[:, :nr] = True                    # rigid unknowns enter every row (root motion)
+        P[:nr, :nr] = True
+        for k in range(self.n_blades):
+            off = self.layout.blade_offset(k)
+            P[:nr, off:off + 6] = True      # root loads enter the rigid dynamics
+        P = sp.csr_matrix(P)
+        P = P + sp.block_diag([sp.csr_matrix((nr, nr), dtype=bool)]
+                              + [blade] * self.n_blades, format="csr")
+        return P.astype(bool)
+
+    def jacobians(self, ydot, y, t):
+        """Exact (complex-step) sparse Jacobians (dR/dy, dR/dydot), csc."""
+        Jy = self._jac(lambda yy: self.residual(ydot, yy, t), y)
+        Jd = self._jac(lambda yd: self.residual(yd, y, t), ydot)
+        return Jy, Jd
+
+    def linearize(self, y, ydot=None, t=0.0):
+        """``(E, A)`` with ``E x' = A x`` for perturbations about (ydot, y) at time t."""
+        ydot = np.zeros(self.n) if ydot is None else ydot
+        Jy, Jd = self.jacobians(ydot, y, t)
+        return Jd, -Jy
+
+    # ------------------------------------------------------------------ steady state
+    def initial_guess(self) -> np.ndarray:
+        """Rigid coordinates and speeds zero; blades in rigid rotation with the hub."""
+        y = np.zeros(self.n)
+        q, u = np.zeros(self.nq), np.zeros(self.nu)
+        v, w = self.rigid.root_motion(q, u, 0.0)
+        for k in range(self.n_blades):
+            off = self.layout.blade_offset(k)
+            y[off:off + self.beam.n] = self.beam.rigid_body_state(np.real(v[k]), np.real(w[k]))
+        return y
+
+    def is_time_invariant_at(self, y, times=None, tol=1e-9) -> bool:
+        """True when ``R(0, y, t)`` stays zero over a revolution (a constant steady state)."""
+        times = np.linspace(0, self.period, 7)[:-1] if times is None else times
+        z = np.zeros(self.n)
+        scale = max(1.0, np.abs(self.residual(z, self.initial_guess(), 0.0)).max())
+        return all(np.abs(self.residual(z, y, t)).max() <= tol * scale for t in times)
+
+    def steady_state(self, tol=1e-10) -> np.ndarray:
+        """The steady state, constant in the rotating frame (no gravity, symmetric rotor).
+
+        Ignorable coordinates (a free yaw angle: its column of dR/dy is zero) are held at
+        their initial value. Raises ConvergenceError if Newton fails, and ValueError if the
+        steady state is periodic rather than constant.
+        """
+        z = np.zeros(self.n)
+        fun = lambda y: self.residual(z, y, 0.0)
+
+        def jac(y):
+            J = sp.csc_matrix(self.jacobians(z, y, 0.0)[0])
+            colmax = np.abs(J).max(axis=0).toarray().ravel()
+            empty = np.flatnonzero(colmax == 0)
+            if len(empty):  # pin ignorable coordinates (zero columns)
+                J = J + sp.csc_matrix((np.ones(len(empty)), (empty, empty)), shape=J.shape)
+            return J
+
+        y, _ = newton(fun, jac, self.initial_guess(), tol=tol, what="turbine steady state")
+        if not self.is_time_invariant_at(y):
+            raise ValueError("steady state: this configuration (gravity, tilt or an asymmetric "
+                             "rotor) has a periodic steady state, not a constant one; use the "
+                             "periodic steady-state solver")
+        return y
+
+    # ------------------------------------------------------------------ symmetry
+    def blade_relabelling(self) -> sp.csr_matrix:
+        """Matrix S relabelling the blades after 1/Nb revolution: blade k's unknowns move to
+        blade k+1's slot; rigid unknowns map as the rigid system says (the teeter angle of a
+        two-bladed hub changes sign). Used by Peters' Fast Floquet."""
+        rigid_sign = self.rigid.relabelling_signs() if hasattr(self.rigid, "relabelling_signs") \
+            else np.array([-1.0 if "teeter" in nm else 1.0 for nm in self.layout.rigid_names])
+        rows, cols, vals = [], [], []
+        nr = self.nq + self.nu
+        rows, cols, vals = list(range(nr)), list(range(nr)), list(rigid_sign)
+        nb = self.beam.n
+        for k in range(self.n_blades):
+            src = self.layout.blade_offset(k) + np.arange(nb)
+            dst = self.layout.blade_offset((k + 1) % self.n_blades) + np.arange(nb)
+            rows += dst.tolist()
+            cols += src.tolist()
+            vals += [1.0] * nb
+        return sp.csr_matrix((vals, (rows, cols)), shape=(self.n, self.n))
