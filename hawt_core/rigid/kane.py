@@ -1,0 +1,312 @@
+"""Rigid-body subsystem of the turbine (nacelle yaw, shaft, teetering hub) by Kane's method.
+
+Reproduces Patil, Lee & Hodges (AIAA 2001-0064), "Treatment of Rigid-Body Subsystem",
+Eqs. 7-11, as a general vector implementation of Kane's method in plain NumPy: any number of
+blades, undersling, precone, shaft tilt, yaw and teeter springs/dampers, gravity on the hub
+mass, either DOF removable.  See ``docs/rigid-bodies.md``.
+
+Frames (every basis right-handed; "x turned by a about z" is a right-handed rotation)
+-------------------------------------------------------------------------------------
+* tower T = inertial N: ``n1`` (= ``t1``) points up along the yaw axis; gravity is ``-g n1``.
+  Origin: the point TY on the yaw axis at the tower top (fixed, the tower is rigid here).
+* nacelle Y: N turned by the yaw angle ``qy`` about ``y1 = n1``
+  (``y2 = cos qy n2 + sin qy n3``, ``y3 = -sin qy n2 + cos qy n3``).
+* tilted nacelle frame Y': Y turned by ``+tilt`` about ``y2``
+  (``y'3 = cos(tilt) y3 + sin(tilt) y1``: positive tilt raises the shaft axis towards ``+y1``;
+  the hub sits at ``+d s3``, so positive tilt raises the rotor). Zero tilt: Y' = Y.
+* shaft S: Y' turned by the azimuth ``psi = Omega0 t`` about ``s3 = y'3``
+  (``s1 = cos psi y'1 + sin psi y'2``, ``s2 = -sin psi y'1 + cos psi y'2``); at t = 0 blade 0
+  points (nearly) up, ``s1 = y'1``.  Omega0 is prescribed (the drive torque is a workless
+  constraint torque about s3 for every generalized speed).
+* hub H: S turned by ``-qh`` about ``s2 = h2``, i.e. the paper's sign
+  ``h1 = cos qh s1 + sin qh s3``, ``h3 = -sin qh s1 + cos qh s3``
+  (positive qh tilts blade 0's root axis h1 towards +s3, downwind/flapwise).
+* blade k root frame b (k = 0..Nb-1, ``phi_k = 2 pi k / Nb``): H turned by ``phi_k`` about
+  ``h3``, then by ``-precone`` about its own ``b2`` so that a positive precone tilts ``b1``
+  towards ``+h3`` (``b1 = cos(beta) a1 + sin(beta) h3`` with ``a1`` the unconed direction).
+  Two blades: blade 1 ("D") has ``d1 = -h1, d2 = -h2, d3 = h3`` (no precone).
+* blade k root point: ``P_k = TY + d s3 + e (cos phi_k h1 + sin phi_k h2) - lhd1 h3``
+  (d = ``nacelle.yaw_to_teeter`` along the (tilted) shaft, e = ``hub.radius``,
+  lhd1 = ``hub.undersling``).  The teeter-axis point is ``SH = TY + d s3``.
+
+Generalized coordinates and speeds (paper's Eq. 7)
+--------------------------------------------------
+``q = (qy, qh)``, ``u = (U1, U2)`` with ``U1 = qy'`` and ``U2 = omega^H . h2``; hence
+``qh' = U1 (y1 . s2) - U2`` (= ``-U2 - sin(psi) U1`` without tilt; ``y1 . s2 =
+-sin(psi) cos(tilt)``).  ``nacelle.yaw_free = False`` drops qy/U1 (yaw locked at 0);
+``hub.teeter = False`` drops qh/U2 (hub fixed to the shaft).
+
+Bodies
+------
+* nacelle Y: yaw inertia ``Iy_n = Iy - (hub yaw inertia at qh = 0)
+  = Iy - Ihlat cos^2(tilt) - Ihlong sin^2(tilt) - m_hub d^2 cos^2(tilt)`` about y1 (model.py:
+  Iy includes the hub; for the paper, ``Iy - Ihlat``); its mass centre is on the yaw axis at TY
+  (so its mass and other inertias play no role with the rigid tower).
+* hub H: principal inertia ``Ihlat`` about h1, h2 and ``Ihlong`` about h3, mass ``m_hub`` at SH.
+* shaft S massless; the tower rigid and fixed.
+
+Loads
+-----
+``root_force[k]`` / ``root_moment[k]`` are the force and moment that blade k exerts ON THE HUB,
+applied at the root point P_k, with components in blade k's root frame b (the beam's root
+reactions ``F0, M0``, not the reaction on the blade).  Yaw spring/damper: torque
+``-(K_y qy + C_y U1) y1`` on Y (reaction on T).  Teeter spring/damper: torque
+``(K_h qh + C_h qh') h2`` on H (reaction on S), i.e. it resists qh and the relative teeter rate
+qh' (physically dissipative; see the note on Eq. 9 in docs/rigid-bodies.md).
+
+Residuals and signs
+-------------------
+``dynamics`` returns Kane's ``F_r + F_r*`` (generalized active plus inertia forces), r over the
+active speeds.  For the paper's configuration the teeter row equals the paper's Eq. 9
+(theory.md) with the same sign, except that Eq. 9's damper term ``+ch U2`` is
+``-ch (U2 + sin(psi) U1)`` here (= ``ch qh'``; equal when ch = 0).  The yaw row is the moment
+balance about the yaw axis plus ``-(y1 . s2) = sin(psi) cos(tilt)`` times the teeter row.
+
+Everything is complex-safe: no abs, real parts, comparisons or branches on q, u, udot or loads
+(branches are only on the configuration), so Jacobians may be taken by complex step.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["RigidSystem", "rot1", "rot2", "rot3"]
+
+
+def _rotation(axis: int, a) -> np.ndarray:
+    c = np.cos(a)
+    s = np.sin(a)
+    z = 0.0 * c
+    o = z + 1.0
+    if axis == 0:
+        rows = [[o, z, z], [z, c, -s], [z, s, c]]
+    elif axis == 1:
+        rows = [[c, z, s], [z, o, z], [-s, z, c]]
+    else:
+        rows = [[c, -s, z], [s, c, z], [z, z, o]]
+    return np.array(rows)
+
+
+def rot1(a) -> np.ndarray:
+    """Right-handed rotation by ``a`` about axis 1; columns = turned basis in the old one."""
+    return _rotation(0, a)
+
+
+def rot2(a) -> np.ndarray:
+    """Right-handed rotation by ``a`` about axis 2; columns = turned basis in the old one."""
+    return _rotation(1, a)
+
+
+def rot3(a) -> np.ndarray:
+    """Right-handed rotation by ``a`` about axis 3; columns = turned basis in the old one."""
+    return _rotation(2, a)
+
+
+class RigidSystem:
+    """Nacelle (yaw) + prescribed-speed shaft + teetering hub, Kane's method, any blade count.
+
+    Parameters are read from a :class:`hawt_core.model.Turbine`.  All array arguments may be
+    real or complex; see the module docstring for frames, signs and the meaning of the loads.
+    """
+
+    def __init__(self, turbine):
+        rotor, hub, nac = turbine.rotor, turbine.hub, turbine.nacelle
+        self.turbine = turbine
+        self.n_blades = int(rotor.blades)
+        self.omega0 = float(rotor.speed)
+        self.precone = float(rotor.precone)
+        self.e = float(hub.radius)
+        self.lhd1 = float(hub.undersling)
+        self.d = float(nac.yaw_to_teeter)
+        self.tilt = float(nac.shaft_tilt)
+        self.yaw_free = bool(nac.yaw_free)
+        self.teeter = bool(hub.teeter)
+        self.k_yaw = float(nac.yaw_stiffness)
+        self.c_yaw = float(nac.yaw_damping)
+        self.k_teeter = float(hub.teeter_stiffness)
+        self.c_teeter = float(hub.teeter_damping)
+        self.hub_mass = float(hub.mass)
+        self.hub_inertia = np.diag([hub.inertia_lateral, hub.inertia_lateral,
+                                    hub.inertia_longitudinal]).astype(float)
+        self.g = float(turbine.gravity.g) if turbine.gravity.enabled else 0.0
+        ct, st = np.cos(self.tilt), np.sin(self.tilt)
+        hub_yaw_inertia = (hub.inertia_lateral * ct ** 2 + hub.inertia_longitudinal * st ** 2
+                           + self.hub_mass * (self.d * ct) ** 2)
+        #: yaw inertia of the nacelle body alone (Iy minus the hub's share at qh = 0)
+        self.nacelle_yaw_inertia = float(nac.yaw_inertia) - hub_yaw_inertia
+
+        coords, speeds = [], []
+        if self.yaw_free:
+            coords.append("yaw")
+            speeds.append("yaw_rate")
+        if self.teeter:
+            coords.append("teeter")
+            speeds.append("teeter_speed")
+        self.coordinates = tuple(coords)
+        self.speeds = tuple(speeds)
+        self.n_q = len(coords)
+        self.n_u = len(speeds)
+
+        nb = self.n_blades
+        self.blade_azimuth = 2.0 * np.pi * np.arange(nb) / nb
+        #: (Nb, 3, 3): columns = blade k's root basis b in the hub basis h
+        self.root_in_hub = np.array([rot3(p) @ rot2(-self.precone)
+                                     for p in self.blade_azimuth])
+        #: (Nb, 3): root point relative to the teeter-axis point SH, hub basis h
+        self.root_offset_hub = np.array([[self.e * np.cos(p), self.e * np.sin(p), -self.lhd1]
+                                         for p in self.blade_azimuth])
+
+    # ------------------------------------------------------------------ helpers
+    def _split(self, x, n):
+        """Active entries -> (yaw part, teeter part), zeros for removed DOFs."""
+        x = np.asarray(x)
+        if x.shape != (n,):
+            raise ValueError(f"expected shape ({n},), got {x.shape}")
+        i = 0
+        a = b = 0.0
+        if self.yaw_free:
+            a = x[i]
+            i += 1
+        if self.teeter:
+            b = x[i]
+        return a, b
+
+    def _join(self, a, b):
+        out = []
+        if self.yaw_free:
+            out.append(a)
+        if self.teeter:
+            out.append(b)
+        return np.array(out) if out else np.zeros(0)
+
+    def azimuth(self, t):
+        """Shaft azimuth psi = Omega0 t (blade 0 up at t = 0)."""
+        return self.omega0 * t
+
+    def frames(self, q, t):
+        """Basis matrices in N (columns = unit vectors): dict Y, S, H and B (Nb, 3, 3)."""
+        qy, qh = self._split(q, self.n_q)
+        Y = rot1(qy)
+        S = Y @ rot2(self.tilt) @ rot3(self.azimuth(t))
+        H = S @ rot2(-qh)
+        B = np.einsum("ij,kjl->kil", H, self.root_in_hub)
+        return {"Y": Y, "S": S, "H": H, "B": B}
+
+    def _kin(self, q, u, t):
+        """Velocities, partial velocities and their ingredients, all in N."""
+        qy, qh = self._split(q, self.n_q)
+        U1, U2 = self._split(u, self.n_u)
+        fr = self.frames(q, t)
+        Y, S, H = fr["Y"], fr["S"], fr["H"]
+        y1, s3, h2 = Y[:, 0], S[:, 2], H[:, 1]
+        w_Y = U1 * y1
+        w_S = w_Y + self.omega0 * s3
+        y1h2 = y1 @ h2                    # = y1 . s2
+        # partial angular velocities of H (rows: U1, U2) and the remainder
+        if self.teeter:
+            wr_H = np.array([y1 - y1h2 * h2, h2])
+        else:
+            wr_H = np.array([y1, 0.0 * h2])
+        wr_S = np.array([y1, 0.0 * h2])
+        w_H = wr_H[0] * U1 + wr_H[1] * U2 + self.omega0 * s3
+        # partial velocities of SH (teeter-axis point) and of the root points
+        vr_SH = np.array([self.d * np.cross(y1, s3), 0.0 * s3])
+        v_SH = vr_SH[0] * U1
+        rho = self.root_offset_hub @ H.T                       # (Nb, 3) in N
+        vr_P = vr_SH[:, None, :] + np.cross(wr_H[:, None, :], rho[None, :, :])   # (2, Nb, 3)
+        v_P = v_SH[None, :] + np.cross(w_H[None, :], rho)
+        return dict(qy=qy, qh=qh, U1=U1, U2=U2, fr=fr, y1=y1, s3=s3, h2=h2, y1h2=y1h2,
+                    w_Y=w_Y, w_S=w_S, w_H=w_H, wr_H=wr_H, wr_S=wr_S,
+                    vr_SH=vr_SH, v_SH=v_SH, vr_P=vr_P, v_P=v_P, rho=rho)
+
+    # ------------------------------------------------------------------ public API
+    def root_motion(self, q, u, t):
+        """(v, w), arrays (Nb, 3): inertial velocity of each blade-root point and inertial
+        angular velocity of the hub (= root frame), each in that blade's root basis b."""
+        k = self._kin(q, u, t)
+        B = k["fr"]["B"]
+        v = np.einsum("kji,kj->ki", B, k["v_P"])
+        w = np.einsum("kji,j->ki", B, k["w_H"])
+        return v, w
+
+    def gravity_in_root(self, q, t):
+        """(Nb, 3): the gravity vector ``-g n1`` [m/s^2] in each blade's root basis b."""
+        B = self.frames(q, t)["B"]
+        gN = np.array([-self.g, 0.0, 0.0])
+        return np.einsum("kji,j->ki", B, gN)
+
+    def qdot(self, q, u, t):
+        """Coordinate rates from the speeds: qy' = U1, qh' = U1 (y1 . s2) - U2."""
+        self._split(q, self.n_q)            # shape check only
+        U1, U2 = self._split(u, self.n_u)
+        return self._join(U1, U1 * self._y1s2(t) - U2)
+
+    def _y1s2(self, t):
+        return -np.sin(self.azimuth(t)) * np.cos(self.tilt)
+
+    def kinematics(self, q, qdot, u, t):
+        """Residual of the kinematic ODEs, (n_q,): ``qy' - U1`` and
+        ``qh' + U2 - (y1 . s2) U1`` (= ``qh' + U2 + sin(psi) U1`` without tilt)."""
+        qd = np.asarray(qdot)
+        if qd.shape != (self.n_q,):
+            raise ValueError(f"expected qdot shape ({self.n_q},), got {qd.shape}")
+        return qd - self.qdot(q, u, t)
+
+    def dynamics(self, q, u, udot, t, root_force, root_moment):
+        """Kane's dynamical equations ``F_r + F_r* = 0``, residual (n_u,).
+
+        ``root_force``, ``root_moment``: (Nb, 3) loads exerted BY the blades ON the hub at
+        the root points, each in that blade's root basis b.
+        """
+        k = self._kin(q, u, t)
+        Ud1, Ud2 = self._split(udot, self.n_u)
+        U1, U2 = k["U1"], k["U2"]
+        qy, qh = k["qy"], k["qh"]
+        y1, s3, h2, wr_H, w_H, w_Y = k["y1"], k["s3"], k["h2"], k["wr_H"], k["w_H"], k["w_Y"]
+        H, B = k["fr"]["H"], k["fr"]["B"]
+        Fb = np.asarray(root_force)
+        Mb = np.asarray(root_moment)
+        nb = self.n_blades
+        if Fb.shape != (nb, 3) or Mb.shape != (nb, 3):
+            raise ValueError(f"root loads must have shape ({nb}, 3)")
+
+        # --- accelerations
+        h2dot = np.cross(w_H, h2)
+        s3dot = np.cross(w_Y, s3)
+        if self.teeter:
+            wr1dot = -((y1 @ h2dot) * h2 + k["y1h2"] * h2dot)
+            wr2dot = h2dot
+        else:
+            wr1dot = 0.0 * h2
+            wr2dot = 0.0 * h2
+        alpha_H = (wr_H[0] * Ud1 + wr_H[1] * Ud2 + wr1dot * U1 + wr2dot * U2
+                   + self.omega0 * s3dot)
+        a_SH = self.d * (np.cross(y1, s3) * Ud1 + np.cross(y1, s3dot) * U1)
+
+        # --- generalized inertia forces
+        I_H = H @ self.hub_inertia @ H.T
+        T_star = -(I_H @ alpha_H + np.cross(w_H, I_H @ w_H))
+        R_star = -self.hub_mass * a_SH
+        Fstar = wr_H @ T_star + k["vr_SH"] @ R_star
+        Fstar = Fstar + np.array([-self.nacelle_yaw_inertia * Ud1, 0.0 * Ud1])
+
+        # --- generalized active forces
+        F_N = np.einsum("kij,kj->ki", B, Fb)
+        M_N = np.einsum("kij,kj->ki", B, Mb)
+        F = np.einsum("rki,ki->r", k["vr_P"], F_N) + wr_H @ M_N.sum(axis=0)
+        F = F + k["vr_SH"] @ (self.hub_mass * np.array([-self.g, 0.0, 0.0]))
+        F = F + np.array([-self.k_yaw * qy - self.c_yaw * U1, 0.0 * U1])
+        if self.teeter:
+            qhdot = U1 * k["y1h2"] - U2
+            tau = (self.k_teeter * qh + self.c_teeter * qhdot) * h2   # on H, reaction on S
+            F = F + (wr_H - k["wr_S"]) @ tau
+        res = F + Fstar
+        return self._join(res[0], res[1])
+
+    def hub_kinetic_energy(self, q, u, t):
+        """Kinetic energy of the rigid bodies (nacelle + hub, blades excluded) [J]."""
+        k = self._kin(q, u, t)
+        H = k["fr"]["H"]
+        w = k["w_H"]
+        I_H = H @ self.hub_inertia @ H.T
+        return (0.5 * (w @ (I_H @ w)) + 0.5 * self.hub_mass * (k["v_SH"] @ k["v_SH"])
+                + 0.5 * self.nacelle_yaw_inertia * k["U1"] ** 2)
