@@ -1,0 +1,119 @@
+"""Periodic steady state of the turbine by harmonic balance (Fourier collocation).
+
+With gravity, shaft tilt or an asymmetric rotor the steady state is periodic with the rotor
+period ``T``. Unknowns: the state at ``M = 2K + 1`` equally spaced times ``t_j = j T / M``
+(a trigonometric polynomial of degree K); the time derivative is the exact derivative of that
+polynomial, ``ydot_j = sum_k D_jk y_k`` (Fourier differentiation matrix); the residual
+``R(ydot_j, y_j, t_j) = 0`` is imposed at every collocation time. Newton's method uses the exact
+Jacobian ``blockdiag(dR/dy_j) + blockdiag(dR/dydot_j) (D kron I)``.
+
+Ignorable coordinates (a free yaw angle with no spring: its column of dR/dy is zero) have an
+arbitrary mean; it is held at its initial value by a unit diagonal regularization (it changes
+the Newton path, not the solution).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spl
+
+from .blade_modes import ConvergenceError
+
+
+def fourier_differentiation(M: int, period: float) -> np.ndarray:
+    """Real matrix D (M, M) with ``D @ f(t_j) = f'(t_j)`` for trigonometric polynomials of
+    degree (M-1)/2 sampled at ``t_j = j period / M`` (M odd)."""
+    if M % 2 == 0:
+        raise ValueError(f"harmonic balance: M = {M} samples must be odd")
+    k = np.fft.fftfreq(M, d=1.0 / M)
+    w = 2 * np.pi / period
+    F = np.fft.fft(np.eye(M), axis=0)
+    return np.real(np.fft.ifft(1j * k[:, None] * w * F, axis=0))
+
+
+@dataclass
+class PeriodicSteadyState:
+    """Samples ``states[j]`` at ``times[j]`` over one period; ``at(t)`` interpolates."""
+
+    times: np.ndarray
+    states: np.ndarray
+    period: float
+    iterations: int
+    constant: bool = False
+
+    def at(self, t: float) -> np.ndarray:
+        if self.constant:
+            return self.states[0].copy()
+        M = len(self.times)
+        c = np.fft.fft(self.states, axis=0) / M
+        k = np.fft.fftfreq(M, d=1.0 / M)
+        ph = np.exp(2j * np.pi * k * (t % self.period) / self.period)
+        return np.real(ph @ c)
+
+    def rate_at(self, t: float) -> np.ndarray:
+        if self.constant:
+            return np.zeros(self.states.shape[1])
+        M = len(self.times)
+        c = np.fft.fft(self.states, axis=0) / M
+        k = np.fft.fftfreq(M, d=1.0 / M)
+        w = 2 * np.pi / self.period
+        ph = 1j * k * w * np.exp(2j * np.pi * k * (t % self.period) / self.period)
+        return np.real(ph @ c)
+
+
+def periodic_steady_state(model, harmonics: int = 8, tol: float = 1e-9, max_iter: int = 25,
+                          progress=None) -> PeriodicSteadyState:
+    """Steady state of ``model`` (a TurbineModel): the constant one when it exists (no
+    gravity, tilt or asymmetry), otherwise the periodic one by harmonic balance with
+    ``harmonics`` harmonics. Raises ConvergenceError when Newton does not converge."""
+    if model.rotor_speed <= 0:
+        raise ValueError(f"rotor_speed: {model.rotor_speed} is not allowed for a periodic "
+                         "steady state; need > 0 [rad/s]")
+    try:
+        y = model.steady_state()
+        return PeriodicSteadyState(times=np.array([0.0]), states=y[None], period=model.period,
+                                   iterations=0, constant=True)
+    except ValueError:
+        pass  # genuinely periodic
+    M = 2 * harmonics + 1
+    T = model.period
+    times = np.arange(M) * T / M
+    D = fourier_differentiation(M, T)
+    n = model.n
+    Y = np.tile(model.initial_guess(), (M, 1))
+    KD = sp.kron(sp.csr_matrix(D), sp.identity(n), format="csr")
+
+    def residual(Y):
+        Yd = D @ Y
+        return np.concatenate([model.residual(Yd[j], Y[j], times[j]) for j in range(M)])
+
+    r = residual(Y)
+    scale = max(1.0, np.abs(r).max())
+    for it in range(max_iter):
+        if not np.all(np.isfinite(r)):
+            raise ConvergenceError(f"periodic steady state: non-finite residual at iteration {it}")
+        err = np.abs(r).max()
+        if progress is not None:
+            progress(min(1.0, it / max_iter), f"harmonic balance iteration {it}: residual {err:.2e}")
+        if err <= tol * scale:
+            return PeriodicSteadyState(times=times, states=Y, period=T, iterations=it)
+        Yd = D @ Y
+        jy, jd = zip(*(model.jacobians(Yd[j], Y[j], times[j]) for j in range(M)))
+        Jy = sp.block_diag(jy, format="csr")
+        Jd = sp.block_diag(jd, format="csr")
+        J = (Jy + Jd @ KD).tocsc()
+        ignorable = np.flatnonzero(np.abs(Jy).max(axis=0).toarray().ravel() == 0)
+        if len(ignorable):
+            J = J + sp.csc_matrix((np.ones(len(ignorable)), (ignorable, ignorable)), shape=J.shape)
+        try:
+            dY = spl.splu(J).solve(r)
+        except RuntimeError as exc:
+            raise ConvergenceError(f"periodic steady state: singular Jacobian at iteration {it} "
+                                   f"({exc})") from exc
+        Y = Y - dY.reshape(M, n)
+        r = residual(Y)
+    raise ConvergenceError(f"periodic steady state: harmonic balance did not converge in "
+                           f"{max_iter} iterations (max residual {np.abs(r).max():.3e}, "
+                           f"tolerance {tol * scale:.3e})")
