@@ -602,6 +602,7 @@ def test_blade_relabelling_symmetry():
     for tb, flip in ((general_turbine(2), np.array([1.0, -1.0])),
                      (general_turbine(3, teeter=False), np.array([1.0]))):
         r = RigidSystem(tb)
+        np.testing.assert_array_equal(r.relabelling_signs(), np.concatenate([flip, flip]))
         nb = tb.rotor.blades
         dt = 2 * np.pi / nb / tb.rotor.speed
         for _ in range(5):
@@ -618,6 +619,8 @@ def test_blade_relabelling_symmetry():
             res = r.dynamics(q, u, ud, t, F, M)
             res2 = r.dynamics(flip * q, flip * u, flip * ud, t + dt, F[perm], M[perm])
             np.testing.assert_allclose(res2, flip * res, atol=1e-11 * np.abs(res).max())
+    with pytest.raises(ValueError):
+        RigidSystem(general_turbine(3, teeter=True)).relabelling_signs()
 
 
 @pytest.mark.parametrize("blades,teeter", [(2, True), (3, True), (3, False)])
@@ -655,3 +658,60 @@ def test_complex_step_safety(blades, teeter):
             d_fd = (shifted(hh) - shifted(-hh)) / (2 * hh)
             scale = max(np.abs(d_fd).max(), 1e-3)
             np.testing.assert_allclose(d_cs, d_fd, rtol=0, atol=1e-6 * scale)
+
+
+def test_rigid_rotor_teeter_frequency_end_to_end():
+    """Reference: theory.md, "Checks with known answers": with rigid blades, no teeter
+    spring and the yaw locked the rotor teeters at sqrt((C - A)/B) per-rev (A, B, C: rotor
+    inertias about h1, h2, h3), 0.99901/rev for Table 1.  The rigid blades' root loads ON THE
+    HUB are computed here independently (minus the blades' inertia forces/moments, positions
+    differentiated numerically along trajectories); this checks the sign of the loads.
+    Tolerance 1e-7 relative (finite differences)."""
+    tb = paper_turbine()
+    tb = replace(tb, nacelle=replace(tb.nacelle, yaw_free=False))
+    r, ref = RigidSystem(tb), Ref(tb)
+    m, I1, I2, I3, ell = 67.5772, 5.0, 1e-4, 4.9999, 8.42
+    e, Om = tb.hub.radius, tb.rotor.speed
+    xg, wg = np.polynomial.legendre.leggauss(4)
+    xg, wg = 0.5 * ell * (xg + 1), 0.5 * ell * wg
+    t0 = 0.31
+
+    def residual(c):
+        tr = Trajectory(np.random.default_rng(0), t0, ref)
+        tr.cy[:] = 0.0
+        tr.ch[:] = c
+        F, M = np.zeros((2, 3)), np.zeros((2, 3))
+        for k in range(2):
+            def Bk(tt, k=k):
+                return ref.bases(*tr.q(tt), tt)["B"][k]
+
+            def pt(tt, x, k=k):
+                bs = ref.bases(*tr.q(tt), tt)
+                return bs["P"][k] + x * bs["B"][k][:, 0]
+            B = Bk(t0)
+            w = omega_of(Bk, t0)
+            al = fd4(lambda tt: omega_of(Bk, tt), t0)
+            J = B @ np.diag([I1, I2, I3]) @ B.T
+            FN, MN = np.zeros(3), np.zeros(3)
+            for x, wt in zip(xg, wg):
+                a = fd4(lambda tt: cs_dt(lambda s: pt(s, x), tt), t0)
+                FN -= wt * m * a
+                MN -= wt * (x * np.cross(B[:, 0], m * a) + J @ al + np.cross(w, J @ w))
+            F[k], M[k] = B.T @ FN, B.T @ MN
+        qh = tr.q(t0)[1]
+        U2 = tr.u(t0)[1]
+        U2d = udot_traj(tr, t0)[1]
+        return r.dynamics(np.array([qh]), np.array([U2]), np.array([U2d]), t0, F, M)[0]
+
+    eps = 1e-4
+    c_q = (residual([eps, 0, 0, 0]) - residual([-eps, 0, 0, 0])) / (2 * eps)     # d/d qh
+    c_a = (residual([0, 0, eps, 0]) - residual([0, 0, -eps, 0])) / (2 * eps)     # qh'' = 2 eps
+    # R = a U2' + c qh with U2' = -qh''  ->  qh'' = (c/a) qh
+    a = -c_a / 2.0
+    freq = np.sqrt(-c_q / a) / Om
+    S2 = m * ((e + ell) ** 3 - e ** 3) / 3
+    A = tb.hub.inertia_lateral + 2 * ell * I1
+    B = tb.hub.inertia_lateral + 2 * (S2 + ell * I2)
+    C = tb.hub.inertia_longitudinal + 2 * (S2 + ell * I3)
+    assert abs(freq - np.sqrt((C - A) / B)) <= 1e-7
+    assert abs(freq - 0.99901) < 5e-6

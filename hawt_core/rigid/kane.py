@@ -302,6 +302,19 @@ class RigidSystem:
         res = F + Fstar
         return self._join(res[0], res[1])
 
+    def relabelling_signs(self):
+        """Signs (n_q + n_u,) mapping the rigid unknowns under the blade relabelling symmetry
+        of Fast Floquet: the state ``(S q, S u)`` at ``t + T/Nb`` puts blade k where blade
+        k+1 was at ``t`` (root motion, gravity and loads follow the blades; the yaw row is
+        unchanged and the teeter row changes sign with S).  Yaw: +1.  Teeter (two blades
+        only): -1, since turning the hub by 180 deg about h3 flips qh and U2.  A teetering hub
+        with three or more blades has no such symmetry: ValueError."""
+        if self.teeter and self.n_blades != 2:
+            raise ValueError("a teetering hub with %d blades has no blade-relabelling symmetry"
+                             % self.n_blades)
+        signs = [1.0] * int(self.yaw_free) + [-1.0] * int(self.teeter)
+        return np.array(signs * 2)
+
     def hub_kinetic_energy(self, q, u, t):
         """Kinetic energy of the rigid bodies (nacelle + hub, blades excluded) [J]."""
         k = self._kin(q, u, t)
