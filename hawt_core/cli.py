@@ -1,0 +1,145 @@
+"""The ``hawt`` console script.
+
+Each subcommand is a small function ``cmd_<name>(args) -> int`` plus an argument-adding
+function, registered in one place (``COMMANDS`` below, via ``@command``).  Errors in the input
+(bad file, bad arguments, a model that does not converge) print ONE line to stderr and exit
+with status 2; no traceback.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from typing import Callable, Optional
+
+EXIT_USAGE = 2
+
+
+class CliError(Exception):
+    """A user error: printed as one line, exit status 2."""
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # one line instead of usage + message
+        raise CliError(f"{self.prog}: {message}")
+
+
+#: name -> (help, add_arguments(parser), run(args) -> int)
+COMMANDS: dict = {}
+
+
+def command(name: str, help: str, description: Optional[str] = None):
+    """Register ``run(args)`` as subcommand ``name``; the decorated function gets an
+    ``arguments`` attribute for its argument definitions (set with ``@run.arguments``)."""
+    def deco(run: Callable):
+        entry = {"help": help, "description": description or help, "run": run,
+                 "arguments": lambda p: None}
+
+        def arguments(add: Callable):
+            entry["arguments"] = add
+            return add
+        run.arguments = arguments
+        COMMANDS[name] = entry
+        return run
+    return deco
+
+
+def _positive_int(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not allowed; need an integer >= 1")
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"{v} is not allowed; need an integer >= 1")
+    return v
+
+
+def _rotor_speed(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        v = float("nan")
+    if not math.isfinite(v) or v < 0:
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not allowed; need a finite number >= 0 [rad/s]")
+    return v
+
+
+def _load(path):
+    """The turbine of ``path`` (None: the paper's Table 1 turbine)."""
+    from .io import load_turbine
+    return load_turbine(path)
+
+
+# ---------------------------------------------------------------------------- blade-modes
+@command("blade-modes", help="modes of one blade clamped on the spinning hub",
+         description="Steady state, exact linearization and eigen-analysis of one blade "
+                     "clamped on the hub spinning at the rotor speed (the symmetric blade "
+                     "modes of the paper's Table 2). Prints a table, or JSON with --json.")
+def cmd_blade_modes(args) -> int:
+    from .blade_modes import blade_modes
+    turbine = _load(args.turbine)
+    result = blade_modes(turbine, elements=args.elements, rotor_speed=args.rotor_speed,
+                         count=args.count, method=args.method)
+    result.settings["turbine_file"] = args.turbine
+    if args.plot:
+        result.plot(args.plot)
+    if args.json:
+        print(result.to_json(indent=1))
+    else:
+        print(result.table())
+        if args.plot:
+            print(f"mode shapes written to {args.plot}")
+    return 0
+
+
+@cmd_blade_modes.arguments
+def _blade_modes_args(p):
+    p.add_argument("turbine", nargs="?", default=None, metavar="TURBINE",
+                   help="turbine YAML file (default: the paper's Table 1 turbine)")
+    p.add_argument("--elements", "-n", type=_positive_int, default=None, metavar="N",
+                   help="finite elements per blade (default: the turbine file's)")
+    p.add_argument("--rotor-speed", type=_rotor_speed, default=None, metavar="RAD_PER_S",
+                   help="rotor speed [rad/s] (default: the turbine file's)")
+    p.add_argument("--count", type=_positive_int, default=None,
+                   help="number of lowest modes (default: all, or 30 for large models)")
+    p.add_argument("--method", choices=("auto", "dense", "sparse"), default="auto",
+                   help="eigen-solver: dense QZ with deflation, sparse shift-invert, or auto")
+    p.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    p.add_argument("--plot", metavar="FILE.png", default=None,
+                   help="write the mode shapes to this PNG file")
+
+
+# ---------------------------------------------------------------------------- main
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="hawt", description="Structural dynamics and Floquet stability of "
+                     "horizontal-axis wind turbines (Patil, Lee & Hodges, AIAA 2001-0064).")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    for name, entry in COMMANDS.items():
+        p = sub.add_parser(name, help=entry["help"], description=entry["description"])
+        entry["arguments"](p)
+    return parser
+
+
+def main(argv=None) -> int:
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+        if args.command is None:
+            parser.print_help()
+            return EXIT_USAGE
+        return int(COMMANDS[args.command]["run"](args) or 0)
+    except CliError as exc:
+        print(str(exc), file=sys.stderr)
+        return EXIT_USAGE
+    except (OSError, ValueError, RuntimeError) as exc:
+        msg = " ".join(str(exc).split()) or type(exc).__name__
+        print(f"hawt: error: {msg}", file=sys.stderr)
+        return EXIT_USAGE
+    except KeyboardInterrupt:
+        print("hawt: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
