@@ -255,7 +255,7 @@ def label_modes(model: TurbineModel, fl, columns) -> list:
             energy += classify_energy(model.beam, x[off:off + model.beam.n])
             bvecs.append(np.concatenate([u.ravel(), model.turbine.blade.length * th.ravel()]))
         rig_name = None
-        if rigid and max(rigid.values()) >= elastic:
+        if rigid and max(rigid.values()) >= 3.0 * elastic:
             # the free yaw angle alone is the rigid-body yaw mode; any rigid mode in which the
             # hub teeters appreciably is a teeter mode (the paper's labels)
             rig_name = "teeter" if rigid.get("teeter", 0.0) >= 0.25 * rigid.get("yaw", 0.0) \

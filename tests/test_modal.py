@@ -1,0 +1,153 @@
+"""Floquet modal analysis of the coupled turbine against the paper's Table 2 and exact checks.
+
+References: Patil, Lee & Hodges (AIAA 2001-0064), Table 2 (eigenvalues in per-rev, printed to
+the digits given there); docs/theory.md for the known misprints; generalized eigenvalues of the
+time-invariant (yaw-locked) system as an exact reference for the Floquet machinery.
+"""
+import dataclasses as dc
+
+import numpy as np
+import pytest
+import scipy.linalg as sl
+
+from hawt_core.assembly import TurbineModel
+from hawt_core.blade_modes import finite_modes
+from hawt_core.io import load_turbine
+from hawt_core.modal import Cancelled, modal_analysis, validate_request
+
+# Table 2, rows: (family, symmetry, index) -> per-rev for N = 2, 3, 4 elements
+TABLE2 = {
+    ("flap", "symmetric", 1): (2.43, 2.43, 2.4347),
+    ("flap", "antisymmetric", 1): (8.28, 7.48, 7.3210),
+    ("flap", "symmetric", 2): (24.08, 17.40, 15.5465),
+    ("flap", "antisymmetric", 2): (58.67, 33.38, 28.3486),
+    ("torsion", "symmetric", 1): (2.32, 2.30, 2.2896),
+    ("torsion", "antisymmetric", 1): (2.33, 2.30, 2.2915),
+    ("torsion", "symmetric", 2): (7.40, 6.84, 6.5738),
+    ("torsion", "antisymmetric", 2): (7.40, 6.84, 6.5742),
+    ("lag", "symmetric", 1): (4.81, 4.77, 4.7523),
+    ("lag", "antisymmetric", 1): (5.06, 5.01, 4.9927),
+    ("lag", "symmetric", 2): (52.07, 37.61, 33.5731),
+    ("lag", "antisymmetric", 2): (51.94, 38.21, 34.1087),
+}
+# Printed entries the model does not reproduce (docs/theory.md, docs/VALIDATION.md):
+# N=3 1st antisymmetric flap 7.48 (model and a smooth fit of the paper's own N=2,4 give 7.58:
+# a misprint); N=2 2nd antisymmetric flap 58.67 and lag 51.94 (about 1/rev more: the integer
+# per-rev ambiguity).
+KNOWN_DIFFERENT = {(3, ("flap", "antisymmetric", 1)), (2, ("flap", "antisymmetric", 2)),
+                   (2, ("lag", "antisymmetric", 2))}
+
+
+@pytest.fixture(scope="module")
+def paper():
+    return load_turbine()
+
+
+@pytest.fixture(scope="module")
+def result4(paper):
+    return modal_analysis(paper, elements=4, steps=400)
+
+
+def test_table2_four_elements_within_0p2_percent(result4):
+    """All 12 elastic rows of Table 2 (N = 4) within 0.2 %; every elastic mode undamped
+    (the structure has no damping): damping ratio below 1e-5, the numerical dissipation of
+    Radau IIA at 400 steps for the 34/rev modes."""
+    for key, ref in TABLE2.items():
+        m = result4.find(*key)
+        assert m.frequency_per_rev == pytest.approx(ref[2], rel=2e-3), key
+        assert abs(m.damping_ratio) < 1e-5, key
+
+
+def test_table2_yaw_and_teeter(result4):
+    """Yaw: a zero exponent. Teeter: the pair at 1 per-rev with real parts +-0.0453 (paper:
+    +-0.045299 +- 1i; tolerance 1 % on the real part, 1e-9 on the frequency)."""
+    yaw = [m for m in result4.modes if m.family == "yaw"]
+    assert len(yaw) >= 1 and abs(yaw[0].frequency_per_rev) < 1e-6 and abs(yaw[0].real_per_rev) < 1e-6
+    teeter = [m for m in result4.modes if m.family == "teeter"]
+    assert len(teeter) == 2
+    for m in teeter:
+        assert m.frequency_per_rev == pytest.approx(1.0, abs=1e-9)
+    reals = sorted(m.real_per_rev for m in teeter)
+    assert reals[0] == pytest.approx(-0.045299, rel=1e-2)
+    assert reals[1] == pytest.approx(0.045299, rel=1e-2)
+
+
+@pytest.mark.parametrize("N", [2, 3])
+def test_table2_two_and_three_elements(paper, N):
+    """N = 2, 3 columns to the printed digits (0.5 in the last printed digit, plus 0.3 % for
+    the discretization variant), except the documented misprints (KNOWN_DIFFERENT)."""
+    r = modal_analysis(paper, elements=N, steps=512)
+    for key, ref in TABLE2.items():
+        printed = ref[N - 2]
+        got = r.find(*key).frequency_per_rev
+        if (N, key) in KNOWN_DIFFERENT:
+            assert abs(got - printed) > 0.05, (N, key, got)  # documented disagreement
+            continue
+        assert abs(got - printed) <= 0.005 + 3e-3 * printed, (N, key, got, printed)
+
+
+def test_floquet_equals_eigenvalues_when_time_invariant(paper):
+    """Yaw locked, no gravity: the system is time invariant, so the Floquet exponents equal
+    the generalized eigenvalues of (A, E) (reference) to 1e-6 per-rev (modes below 20/rev)."""
+    locked = dc.replace(paper, nacelle=dc.replace(paper.nacelle, yaw_free=False))
+    r = modal_analysis(locked, elements=4, steps=400)
+    m = TurbineModel(locked, elements=4)
+    E, A = m.linearize(m.steady_state())
+    lam, _ = finite_modes(A.toarray(), E.toarray(), 1e4 * m.rotor_speed)
+    ref = np.sort(lam.imag / m.rotor_speed)
+    ref = ref[ref < 20]
+    got = np.sort([md.frequency_per_rev for md in r.modes if 0 < md.frequency_per_rev < 20])
+    assert len(got) == len(ref)
+    np.testing.assert_allclose(got, ref, atol=1e-6)
+
+
+def test_fast_floquet_equals_full_period(paper):
+    """Peters' Fast Floquet (T/2 and the blade relabelling) vs the full-period monodromy:
+    the same exponents to 1e-8 per-rev (same marching method and step size), except the
+    free-yaw zero pair, a defective double multiplier at 1 whose round-off sensitivity is
+    sqrt(eps): 1e-6 there."""
+    fast = modal_analysis(paper, elements=2, steps=128, fast=True)
+    full = modal_analysis(paper, elements=2, steps=128, fast=False)
+    pick = lambda r, yaw: np.array(sorted((m.frequency_per_rev, m.real_per_rev)
+                                          for m in r.modes if (m.family == "yaw") == yaw))
+    for yaw, tol in ((False, 1e-8), (True, 1e-6)):
+        a, b = pick(fast, yaw), pick(full, yaw)
+        assert a.shape == b.shape
+        np.testing.assert_allclose(a, b, atol=tol)
+
+
+def test_symmetric_modes_equal_single_blade(paper, result4):
+    """Symmetric modes load the hub with equal and opposite loads (paper): they equal the
+    single clamped blade's modes (hawt_core.blade_modes, an independent eigen-analysis)
+    to 1e-6 relative (the temporal error of 400 Radau IIA steps at 34/rev)."""
+    from hawt_core.blade_modes import blade_modes
+    single = blade_modes(paper, 4)
+    for fam in ("flap", "lag", "torsion"):
+        for k in (1, 2):
+            ref = [m for m in single.modes if m.family == fam][k - 1].frequency_per_rev
+            assert result4.find(fam, "symmetric", k).frequency_per_rev == pytest.approx(ref, rel=1e-6)
+
+
+def test_bad_requests_are_rejected_with_the_field_named():
+    """Invalid overrides name the field and the value."""
+    for kwargs, frag in [({"elements": 0}, "elements: 0"), ({"rotor_speed": -1.0}, "rotor_speed: -1.0"),
+                         ({"rotor_speed": float("nan")}, "rotor_speed: nan"),
+                         ({"steps": 10**9}, "steps: 1000000000"), ({"method": "rk4"}, "method: 'rk4'")]:
+        with pytest.raises(ValueError, match=frag):
+            validate_request(**kwargs)
+
+
+def test_cancel_stops_the_analysis(paper):
+    """cancel() returning True raises Cancelled before any heavy work continues."""
+    with pytest.raises(Cancelled):
+        modal_analysis(paper, elements=2, cancel=lambda: True)
+
+
+def test_json_keys(result4):
+    """The JSON of `hawt modes --json`: key `modes` with the documented fields, settings."""
+    d = result4.to_dict()
+    assert set(d["settings"]) >= {"elements", "rotor_speed", "method", "steps"}
+    for m in d["modes"]:
+        assert set(m) >= {"family", "symmetry", "index", "frequency_per_rev", "real_per_rev",
+                          "frequency_hz", "damping_ratio"}
+        assert m["family"] in ("yaw", "teeter", "flap", "lag", "torsion", "axial", "shear", "tower")
