@@ -1,0 +1,854 @@
+"""Generic Floquet machinery for linear time-periodic descriptor systems.
+
+    E(t) x'(t) = A(t) x(t),     E(t + T) = E(t),  A(t + T) = A(t),
+
+with ``E(t)`` singular (algebraic variables, Lagrange multipliers, index up to 3).  See
+``docs/floquet.md`` for the method, the Fast Floquet formula and the references.
+
+Main entry points::
+
+    dae = LinearPeriodicDAE(E, A, period, differential, S=None, blades=None)
+    res = floquet_analysis(dae, method="radau", steps=None, ...)   # -> FloquetResult
+    mono = monodromy(dae, method="radau", steps=None, ...)          # -> Monodromy
+
+Methods
+-------
+``"radau"`` (default)
+    3-stage Radau IIA (order 5 for ODEs / index 1; stiffly accurate, L-stable; convergent for
+    index-3 Hessenberg systems, Hairer & Wanner II, sec. VI.7 and VII.4).
+``"paper"``
+    The paper's finite elements in time: central differencing (implicit midpoint, equal to the
+    trapezoidal rule for constant coefficients), second order, 1000 steps per period by default.
+
+The algebraic and hidden-constraint components are removed by a state-space reduction on the
+consistent subspace: a basis ``Z`` (n x d) of consistent initial values at t = 0 is obtained from
+the range of three Radau IIA steps ending at t = 0 (stiffly accurate steps annihilate every
+inconsistent component of an index <= 3 system); only these d columns are marched and the
+monodromy is the d x d matrix ``Z_D^+ Phi(T) Z`` (D: differential rows).  The result therefore
+contains exactly ``d`` = dim(consistent subspace) multipliers.
+"""
+from __future__ import annotations
+
+import math
+import time
+import warnings
+from dataclasses import dataclass, field
+from typing import Callable, Optional, Sequence
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+__all__ = [
+    "LinearPeriodicDAE",
+    "FourierCoefficients",
+    "DirectCoefficients",
+    "Monodromy",
+    "FloquetResult",
+    "monodromy",
+    "floquet_analysis",
+    "RADAU_IIA",
+]
+
+# --------------------------------------------------------------------------------------------
+# Radau IIA, 3 stages (Hairer & Wanner II, Table 5.6)
+_s6 = math.sqrt(6.0)
+RADAU_IIA = {
+    "c": np.array([(4.0 - _s6) / 10.0, (4.0 + _s6) / 10.0, 1.0]),
+    "A": np.array([
+        [(88.0 - 7.0 * _s6) / 360.0, (296.0 - 169.0 * _s6) / 1800.0, (-2.0 + 3.0 * _s6) / 225.0],
+        [(296.0 + 169.0 * _s6) / 1800.0, (88.0 + 7.0 * _s6) / 360.0, (-2.0 - 3.0 * _s6) / 225.0],
+        [(16.0 - _s6) / 36.0, (16.0 + _s6) / 36.0, 1.0 / 9.0],
+    ]),
+}
+_RADAU_W = np.linalg.inv(RADAU_IIA["A"])      # stage-derivative weights: K = W (X - x0) / h
+_RADAU_RHO = _RADAU_W.sum(axis=1)
+
+DEFAULT_STEPS = {"radau": 256, "paper": 1000}
+_SETTLE_STEPS = 3
+
+
+# --------------------------------------------------------------------------------------------
+# sparse patterns and coefficient providers
+class _Pattern:
+    """A fixed sparsity pattern (CSC order) of an n x n matrix."""
+
+    def __init__(self, n: int, keys: np.ndarray):
+        self.n = n
+        self.keys = np.unique(np.asarray(keys, dtype=np.int64))   # key = col * n + row
+        self.rows = (self.keys % n).astype(np.int64)
+        self.cols = (self.keys // n).astype(np.int64)
+        self.indptr = np.concatenate(
+            [[0], np.cumsum(np.bincount(self.cols, minlength=n))]).astype(np.int64)
+        self.indices = self.rows.astype(np.int32)
+
+    @property
+    def nnz(self) -> int:
+        return self.keys.size
+
+    @staticmethod
+    def keys_of(mat, n: int) -> tuple[np.ndarray, np.ndarray]:
+        m = _as_sparse(mat, n).tocoo()
+        return m.col.astype(np.int64) * n + m.row.astype(np.int64), m.data
+
+    def data_of(self, mat) -> Optional[np.ndarray]:
+        """Values of ``mat`` on this pattern; None if ``mat`` has nonzeros outside it."""
+        keys, vals = self.keys_of(mat, self.n)
+        pos = np.searchsorted(self.keys, keys)
+        pos_c = np.minimum(pos, self.nnz - 1) if self.nnz else pos
+        ok = (pos < self.nnz) & (self.keys[pos_c] == keys) if self.nnz else np.zeros(keys.size, bool)
+        if not np.all(ok | (vals == 0)):
+            return None
+        out = np.zeros(self.nnz)
+        np.add.at(out, pos[ok], np.real(vals[ok]))
+        return out
+
+    def matrix(self, data: np.ndarray) -> sp.csc_matrix:
+        return sp.csc_matrix((data, self.indices, self.indptr), shape=(self.n, self.n))
+
+
+def _as_sparse(mat, n: int):
+    if sp.issparse(mat):
+        m = mat
+    else:
+        m = sp.csc_matrix(np.asarray(mat, dtype=float))
+    if m.shape != (n, n):
+        raise ValueError(f"coefficient matrix has shape {m.shape}, expected {(n, n)}")
+    return m
+
+
+class DirectCoefficients:
+    """Evaluates E(t), A(t) by calling the user's callables at every requested time."""
+
+    kind = "direct"
+
+    def __init__(self, dae: "LinearPeriodicDAE", probe_times: Optional[Sequence[float]] = None):
+        self.dae = dae
+        n = dae.n
+        if probe_times is None:   # irrational fractions of the period: catch time-varying zeros
+            probe_times = dae.period * np.array([0.0, 0.1234567, 0.3819660, 0.7071068])
+        ke, ka = [], []
+        for t in probe_times:
+            ke.append(_Pattern.keys_of(dae.E(float(t)), n)[0])
+            ka.append(_Pattern.keys_of(dae.A(float(t)), n)[0])
+        self.pE = _Pattern(n, np.concatenate(ke))
+        self.pA = _Pattern(n, np.concatenate(ka))
+        self.version = 0
+        self.evaluations = 0
+
+    def _data(self, which: str, t: float) -> np.ndarray:
+        mat = (self.dae.E if which == "E" else self.dae.A)(float(t))
+        pat = self.pE if which == "E" else self.pA
+        d = pat.data_of(mat)
+        if d is None:   # a new nonzero appeared: grow the pattern, invalidate templates
+            keys = _Pattern.keys_of(mat, self.dae.n)[0]
+            new = _Pattern(self.dae.n, np.concatenate([pat.keys, keys]))
+            if which == "E":
+                self.pE = new
+            else:
+                self.pA = new
+            self.version += 1
+            raise _PatternChanged()
+        return d
+
+    def data_at(self, times) -> tuple[np.ndarray, np.ndarray]:
+        times = np.atleast_1d(np.asarray(times, dtype=float))
+        self.evaluations += times.size
+        Ed = np.empty((times.size, self.pE.nnz))
+        Ad = np.empty((times.size, self.pA.nnz))
+        for i, t in enumerate(times):
+            Ed[i] = self._data("E", t)
+            Ad[i] = self._data("A", t)
+        return Ed, Ad
+
+
+class _PatternChanged(Exception):
+    pass
+
+
+class FourierCoefficients:
+    """Truncated Fourier series of E(t), A(t) on their union sparsity patterns.
+
+    The data arrays of the sparse matrices sampled at ``2K + 1`` equally spaced times are
+    transformed by a real FFT; the series reproduces any trigonometric polynomial of degree
+    <= K exactly.  ``error`` is the largest relative deviation from a direct evaluation at
+    check times that are not on the sampling grid.
+    """
+
+    kind = "fourier"
+    version = 0
+
+    def __init__(self, dae: "LinearPeriodicDAE", harmonics="auto", tol: float = 1e-10,
+                 max_harmonics: int = 67):
+        self.dae = dae
+        n, T = dae.n, dae.period
+        self.tol = tol
+        cache: dict[float, tuple] = {}
+
+        def sample(t):
+            key = round(float(t) / T, 15)
+            if key not in cache:
+                cache[key] = (_as_sparse(dae.E(float(t)), n), _as_sparse(dae.A(float(t)), n))
+            return cache[key]
+
+        if harmonics == "auto":
+            levels = []
+            N = 5
+            while (N - 1) // 2 <= max_harmonics:
+                levels.append(N)
+                N *= 3           # nested grids: every sample is reused at the next level
+        else:
+            K = int(harmonics)
+            if K < 0:
+                raise ValueError("harmonics must be >= 0")
+            levels = [2 * K + 1]
+        self.evaluations = 0
+        for li, N in enumerate(levels):
+            ts = T * np.arange(N) / N
+            mats = [sample(t) for t in ts]
+            # check times: points of the next (3N) grid, i.e. not on this grid
+            tc = T * (3 * np.array([0, N // 3, (2 * N) // 3, N - 1]) + 1) / (3 * N)
+            chk = [sample(t) for t in tc]
+            keysE = np.concatenate([_Pattern.keys_of(m[0], n)[0] for m in mats + chk])
+            keysA = np.concatenate([_Pattern.keys_of(m[1], n)[0] for m in mats + chk])
+            self.pE, self.pA = _Pattern(n, keysE), _Pattern(n, keysA)
+            self._fit(np.array([self.pE.data_of(m[0]) for m in mats]),
+                      np.array([self.pA.data_of(m[1]) for m in mats]), N)
+            Ec, Ac = self.data_at(tc)
+            Ed = np.array([self.pE.data_of(m[0]) for m in chk])
+            Ad = np.array([self.pA.data_of(m[1]) for m in chk])
+            errE = np.max(np.abs(Ec - Ed), initial=0.0) / max(np.max(np.abs(Ed), initial=0.0), 1e-300)
+            errA = np.max(np.abs(Ac - Ad), initial=0.0) / max(np.max(np.abs(Ad), initial=0.0), 1e-300)
+            self.error = float(max(errE, errA))
+            self.samples = N
+            if self.error <= tol:
+                break
+        self.evaluations = len(cache)
+        if self.error > tol:
+            warnings.warn(f"Fourier series of E(t), A(t) with {self.harmonics} harmonics has a "
+                          f"relative truncation error {self.error:.2e} > tol {tol:.1e}",
+                          RuntimeWarning, stacklevel=3)
+        self._trim()
+
+    def _fit(self, Ed: np.ndarray, Ad: np.ndarray, N: int):
+        K = (N - 1) // 2
+        self.harmonics = K
+        self.k = np.arange(1, K + 1)
+        self.cE = self._coef(Ed, N, K)
+        self.cA = self._coef(Ad, N, K)
+
+    @staticmethod
+    def _coef(D: np.ndarray, N: int, K: int) -> np.ndarray:
+        """Rows: [a0, a1..aK, b1..bK] with f = a0 + sum a_k cos(k w t) + b_k sin(k w t)."""
+        F = np.fft.rfft(D, axis=0) / N
+        a0 = F[0].real
+        ak = 2.0 * F[1:K + 1].real
+        bk = -2.0 * F[1:K + 1].imag
+        return np.vstack([a0[None, :], ak, bk])
+
+    def _trim(self):
+        """Drop harmonics whose coefficients are below tol * scale in both E and A."""
+        K = self.harmonics
+        if K == 0:
+            return
+        sE = max(np.max(np.abs(self.cE), initial=0.0), 1e-300)
+        sA = max(np.max(np.abs(self.cA), initial=0.0), 1e-300)
+        keep = []
+        for j in range(1, K + 1):
+            mE = max(np.max(np.abs(self.cE[[j, K + j]]), initial=0.0) / sE, 0.0)
+            mA = max(np.max(np.abs(self.cA[[j, K + j]]), initial=0.0) / sA, 0.0)
+            if max(mE, mA) > 0.01 * self.tol:
+                keep.append(j)
+        keep = np.array(keep, dtype=int)
+        rows = np.concatenate([[0], keep, K + keep]).astype(int)
+        self.k = keep
+        self.cE = self.cE[rows]
+        self.cA = self.cA[rows]
+        self.harmonics_kept = keep.size
+
+    def basis(self, times) -> np.ndarray:
+        th = self.dae.omega * np.atleast_1d(np.asarray(times, dtype=float))[:, None] * self.k[None, :]
+        return np.hstack([np.ones((th.shape[0], 1)), np.cos(th), np.sin(th)])
+
+    def data_at(self, times) -> tuple[np.ndarray, np.ndarray]:
+        B = self.basis(times)
+        return B @ self.cE, B @ self.cA
+
+    def E(self, t: float) -> sp.csc_matrix:
+        return self.pE.matrix(self.data_at([t])[0][0])
+
+    def A(self, t: float) -> sp.csc_matrix:
+        return self.pA.matrix(self.data_at([t])[1][0])
+
+
+# --------------------------------------------------------------------------------------------
+class LinearPeriodicDAE:
+    """``E(t) x' = A(t) x`` with period ``period``.
+
+    Parameters
+    ----------
+    E, A : callables t -> (n, n) scipy.sparse matrix (or dense array).
+    period : T = 2 pi / Omega0.
+    differential : bool (n,), True where the variable's derivative appears (ker E(t) must be
+        spanned by the other unit vectors for all t).
+    S : optional (n, n) signed permutation (orthogonal) for Fast Floquet, with the convention
+        ``E(t + T/Nb) = S_rows E(t) S^T`` and ``A(t + T/Nb) = S_rows A(t) S^T``,
+        ``S^Nb = I``.  Then ``x(t) -> S x(t - T/Nb)`` maps solutions to solutions and
+        ``Phi(T) = (S^T Phi(T/Nb))^Nb`` (docs/floquet.md).  ``S_rows`` (relabelling of the
+        equations) defaults to ``S``; it is only used by :meth:`check_symmetry`.
+    blades : Nb, the number of identical equally spaced blades (required with S).
+    """
+
+    def __init__(self, E: Callable, A: Callable, period: float, differential,
+                 S=None, blades: Optional[int] = None, S_rows=None):
+        self.E = E
+        self.A = A
+        self.period = float(period)
+        if not self.period > 0:
+            raise ValueError("period must be positive")
+        self.differential = np.asarray(differential, dtype=bool).ravel()
+        self.n = self.differential.size
+        self.S = None if S is None else sp.csr_matrix(S, dtype=float)
+        self.S_rows = None if S_rows is None else sp.csr_matrix(S_rows, dtype=float)
+        self.blades = None if blades is None else int(blades)
+        if self.S is not None:
+            if self.blades is None or self.blades < 2:
+                raise ValueError("S given: blades (>= 2) is required")
+            if self.S.shape != (self.n, self.n):
+                raise ValueError("S must be n x n")
+            P = sp.identity(self.n, format="csr")
+            for _ in range(self.blades):
+                P = self.S @ P
+            if abs(P - sp.identity(self.n)).max() > 1e-12:
+                raise ValueError("S^blades must be the identity")
+            if abs(self.S @ self.S.T - sp.identity(self.n)).max() > 1e-12:
+                raise ValueError("S must be orthogonal (a signed permutation)")
+            dS = np.abs(self.S) @ self.differential.astype(float)
+            if not np.array_equal(dS > 0.5, self.differential):
+                raise ValueError("S must map differential variables to differential variables")
+
+    @property
+    def omega(self) -> float:
+        return 2.0 * math.pi / self.period
+
+    def fourier(self, harmonics="auto", tol: float = 1e-10, max_harmonics: int = 67) -> FourierCoefficients:
+        """Fourier series of E(t), A(t) (see :class:`FourierCoefficients`)."""
+        return FourierCoefficients(self, harmonics=harmonics, tol=tol, max_harmonics=max_harmonics)
+
+    def check_symmetry(self, times: Optional[Sequence[float]] = None) -> float:
+        """Largest relative residual of ``E(t+T/Nb) = S_rows E(t) S^T`` (and A) at ``times``."""
+        if self.S is None:
+            raise ValueError("no symmetry S given")
+        tau = self.period / self.blades
+        Sr = self.S if self.S_rows is None else self.S_rows
+        if times is None:
+            times = self.period * np.array([0.0, 0.137, 0.4142, 0.77])
+        worst = 0.0
+        for t in times:
+            for f in (self.E, self.A):
+                lhs = _as_sparse(f(float(t) + tau), self.n)
+                rhs = Sr @ _as_sparse(f(float(t)), self.n) @ self.S.T
+                scale = max(abs(lhs).max(), abs(rhs).max(), 1e-300)
+                worst = max(worst, abs(lhs - rhs).max() / scale)
+        return float(worst)
+
+
+# --------------------------------------------------------------------------------------------
+# marching
+class _Assembler:
+    """Sum of scaled pattern blocks into one CSC matrix (template with precomputed scatter)."""
+
+    def __init__(self, rows: np.ndarray, cols: np.ndarray, shape: tuple[int, int]):
+        N = shape[0]
+        keys = cols.astype(np.int64) * N + rows.astype(np.int64)
+        uniq, self.inv = np.unique(keys, return_inverse=True)
+        self.nnz = uniq.size
+        self.indices = (uniq % N).astype(np.int32)
+        self.indptr = np.concatenate([[0], np.cumsum(np.bincount(uniq // N, minlength=shape[1]))])
+        self.shape = shape
+
+    def matrix(self, vals: np.ndarray) -> sp.csc_matrix:
+        data = np.bincount(self.inv, weights=vals, minlength=self.nnz)
+        return sp.csc_matrix((data, self.indices, self.indptr), shape=self.shape)
+
+
+class _Stepper:
+    """One-step maps of E(t) x' = A(t) x, many right-hand sides at once."""
+
+    def __init__(self, coeffs, method: str):
+        self.coeffs = coeffs
+        self.method = method
+        self.version = None
+        self.factorizations = 0
+
+    def _build(self):
+        c = self.coeffs
+        n = c.dae.n
+        pE, pA = c.pE, c.pA
+        if self.method == "radau":
+            rows, cols = [], []
+            for j in range(3):
+                for l in range(3):
+                    rows.append(pE.rows + j * n)
+                    cols.append(pE.cols + l * n)
+            for j in range(3):
+                rows.append(pA.rows + j * n)
+                cols.append(pA.cols + j * n)
+            self.lhs = _Assembler(np.concatenate(rows), np.concatenate(cols), (3 * n, 3 * n))
+            self.rhs = _Assembler(np.concatenate([pE.rows + j * n for j in range(3)]),
+                                  np.concatenate([pE.cols] * 3), (3 * n, n))
+        else:
+            # differential rows (E row nonzero somewhere): central differencing about t+h/2;
+            # algebraic rows (zero rows of E): collocated at the new node t+h
+            alg_row = np.ones(n, dtype=bool)
+            alg_row[pE.rows] = False
+            self.a_mid = ~alg_row[pA.rows]
+            self.a_end = alg_row[pA.rows]
+            rows = np.concatenate([pE.rows, pA.rows[self.a_mid], pA.rows[self.a_end]])
+            cols = np.concatenate([pE.cols, pA.cols[self.a_mid], pA.cols[self.a_end]])
+            self.lhs = _Assembler(rows, cols, (n, n))
+            self.rhs = _Assembler(np.concatenate([pE.rows, pA.rows[self.a_mid]]),
+                                  np.concatenate([pE.cols, pA.cols[self.a_mid]]), (n, n))
+        self.version = c.version
+
+    def stage_times(self, t: float, h: float) -> np.ndarray:
+        if self.method == "radau":
+            return t + h * RADAU_IIA["c"]
+        return np.array([t + 0.5 * h, t + h])
+
+    def step(self, X: np.ndarray, h: float, Ed: np.ndarray, Ad: np.ndarray) -> np.ndarray:
+        """Advance X (n x m) over one step; Ed, Ad: coefficient data at the stage times."""
+        n = self.coeffs.dae.n
+        if self.method == "radau":
+            vals = np.concatenate([((_RADAU_W / h)[:, :, None] * Ed[:, None, :]).ravel(),
+                                   (-Ad).ravel()])
+            L = self.lhs.matrix(vals)
+            R = self.rhs.matrix(((_RADAU_RHO / h)[:, None] * Ed).ravel())
+            lu = spla.splu(L)
+            self.factorizations += 1
+            Xs = lu.solve(np.asarray(R @ X))
+            return Xs[2 * n:]
+        Em, Am = Ed[0] / h, 0.5 * Ad[0][self.a_mid]
+        L = self.lhs.matrix(np.concatenate([Em, -Am, -Ad[1][self.a_end]]))
+        R = self.rhs.matrix(np.concatenate([Em, Am]))
+        lu = spla.splu(L)
+        self.factorizations += 1
+        return lu.solve(np.asarray(R @ X))
+
+    def march(self, X0: np.ndarray, t0: float, h: float, nsteps: int,
+              store_every: int = 0, store_rows=None, chunk: int = 64):
+        """March X0 from t0 over nsteps steps.  Returns (X_end, samples) where samples[i] are
+        the rows ``store_rows`` of X at t0 + i*store_every*h (i = 0 .. nsteps/store_every - 1)."""
+        X = np.array(X0, dtype=float, copy=True)
+        samples = []
+        if store_every:
+            samples.append(X[store_rows].copy())
+        k = 0
+        while k < nsteps:
+            m = min(chunk, nsteps - k)
+            ts = np.concatenate([self.stage_times(t0 + (k + i) * h, h) for i in range(m)])
+            try:
+                if self.version != self.coeffs.version:
+                    self._build()
+                Ed, Ad = self.coeffs.data_at(ts)
+            except _PatternChanged:
+                continue        # pattern grew: rebuild templates and redo this chunk
+            ns = ts.size // m
+            if self.version != self.coeffs.version:
+                self._build()
+            for i in range(m):
+                X = self.step(X, h, Ed[i * ns:(i + 1) * ns], Ad[i * ns:(i + 1) * ns])
+                k += 1
+                if store_every and k % store_every == 0 and k < nsteps:
+                    samples.append(X[store_rows].copy())
+        return X, samples
+
+
+def _settle(coeffs, h: float, t_end: float) -> np.ndarray:
+    """_SETTLE_STEPS Radau IIA steps of length h ending at t_end, applied to all differential
+    unit vectors (the algebraic columns are irrelevant: a step depends on x0 only via E x0)."""
+    dae = coeffs.dae
+    diff = np.flatnonzero(dae.differential)
+    X0 = np.zeros((dae.n, diff.size))
+    X0[diff, np.arange(diff.size)] = 1.0
+    st = _Stepper(coeffs, "radau")
+    X, _ = st.march(X0, t_end - _SETTLE_STEPS * h, h, _SETTLE_STEPS)
+    return X, st.factorizations
+
+
+def _consistent_basis(coeffs, h: float, t_end: float, dynamic_dim: Optional[int]):
+    """Basis Z (n x d) of consistent values at t_end, with Z_D orthonormal.
+
+    d = numerical rank of the settling map with tiny steps (h/100): it is a near-projector onto
+    the consistent subspace, so its nonzero singular values are >= ~1 while every inconsistent
+    component (algebraic, position- and hidden-constraint violations) is annihilated; with
+    time-varying constraints the steps of length h leave O(h^q) hidden-constraint violations
+    (tiny singular values whose multipliers are 0), which the small steps push to roundoff.
+    Z spans the top-d singular subspace of the settling map with the marching step h, i.e. the
+    range of the last steps of the period map (so Phi Z lies in span Z up to O(h^q)).
+    """
+    diff = np.flatnonzero(coeffs.dae.differential)
+    Xs, f1 = _settle(coeffs, h * 1e-2, t_end)
+    s_small = np.linalg.svd(Xs[diff], compute_uv=False)
+    d = _numerical_rank(s_small) if dynamic_dim is None else int(dynamic_dim)
+    X, f2 = _settle(coeffs, h, t_end)
+    U, s, Vt = np.linalg.svd(X[diff], full_matrices=False)
+    Z = X @ (Vt[:d].T / s[:d])
+    if d > 0 and dynamic_dim is None:
+        # the two subspaces must agree to O(h^q); a large angle means the spurious (hidden
+        # constraint) directions of the h-steps outweigh dynamic ones: badly scaled system
+        Us = np.linalg.svd(Xs[diff], full_matrices=False)[0][:, :d]
+        ang = np.linalg.norm(Us - U[:, :d] @ (U[:, :d].T @ Us), 2)
+        if ang > 1e-2:
+            warnings.warn(f"consistent subspace: step-size dependent by {ang:.1e}; "
+                          "reduce the step or rescale the variables", RuntimeWarning, stacklevel=3)
+    return Z, s_small, d, f1 + f2
+
+
+def _numerical_rank(s: np.ndarray, min_gap_decades: float = 4.0) -> int:
+    """Rank at the largest gap in log10(s) that is at least min_gap_decades wide and below
+    s[0]*1e-5 ... the nonzero singular values of the (near-)projector are >= ~1."""
+    if s.size == 0 or s[0] == 0:
+        return 0
+    ls = np.log10(np.maximum(s / s[0], 1e-300))
+    gaps = ls[:-1] - ls[1:]
+    cand = [(g, i) for i, g in enumerate(gaps) if g >= min_gap_decades and ls[i + 1] < -6.0]
+    if not cand:
+        if ls[-1] < -10.0:
+            warnings.warn("consistent subspace: no clear rank gap in the settling map; "
+                          "pass dynamic_dim", RuntimeWarning, stacklevel=3)
+            return int(np.sum(ls > -8.0))
+        return s.size
+    g, i = max(cand)
+    return i + 1
+
+
+# --------------------------------------------------------------------------------------------
+@dataclass
+class Monodromy:
+    """Monodromy restricted to the consistent subspace.
+
+    ``matrix`` is d x d; for Fast Floquet it is the reduced map ``Z_D^+ S^T Phi(T/Nb) Z`` whose
+    eigenvalues raised to the power ``blades`` are the multipliers of Phi(T)."""
+    matrix: np.ndarray                 # d' x d' in the coordinates of `basis`
+    basis: np.ndarray                  # n x d': Z (radau) or the identity (paper)
+    consistent_basis: np.ndarray       # Z (n x d), consistent at t = 0, Z_D orthonormal
+    samples: list                      # rows `sample_rows` of Phi(t_m, 0) Z, t_m = m*T/M
+    sample_rows: np.ndarray
+    sample_times: np.ndarray           # over [0, T/Nb) for fast, [0, T) otherwise
+    samples_per_period: int
+    fast: bool
+    blades: int
+    method: str
+    steps: int                         # steps per period
+    marched_steps: int
+    n_dynamic: int
+    settle_singular_values: np.ndarray
+    coefficients: object
+    factorizations: int
+    wall_time: float
+
+    def eig(self) -> tuple[np.ndarray, np.ndarray]:
+        """The d dynamic eigenpairs (mu, V) of ``matrix`` (columns of V in basis coordinates).
+
+        For the full descriptor map of the "paper" method the spurious eigenvalues (algebraic
+        variables, hidden constraints; |mu| ~ 1 because R(inf) = -1) are discarded: the d
+        eigenvectors closest to the consistent subspace span(Z) are kept."""
+        mu, V = sla.eig(self.matrix)
+        d = self.n_dynamic
+        if V.shape[0] == d:
+            return mu, V
+        Z = self.consistent_basis
+        X = self.basis @ V
+        D = self._diff
+        C = np.linalg.lstsq(Z[D], X[D], rcond=None)[0]
+        nD = np.linalg.norm(X[D], axis=0)
+        res = np.linalg.norm(X[D] - Z[D] @ C, axis=0) / np.maximum(nD, 1e-300)
+        res[nD <= 1e-8 * np.linalg.norm(X, axis=0)] = np.inf     # purely algebraic
+        order = np.argsort(res, kind="stable")
+        keep = np.sort(order[:d])
+        self.selection_residuals = (res[order[:d]].max() if d else 0.0,
+                                    res[order[d]] if d < res.size else np.inf)
+        return mu[keep], V[:, keep]
+
+
+def _closure_rows(rows: np.ndarray, S, blades: int) -> np.ndarray:
+    rows = np.unique(rows)
+    if S is None:
+        return rows
+    allr = set(rows.tolist())
+    cur = rows
+    Sa = abs(S).tocsr()
+    for _ in range(blades):
+        v = np.zeros(S.shape[0])
+        v[cur] = 1.0
+        cur = np.flatnonzero(Sa @ v)
+        allr.update(cur.tolist())
+    return np.array(sorted(allr), dtype=int)
+
+
+def _make_coefficients(dae, coefficients, harmonics, tol):
+    if isinstance(coefficients, (FourierCoefficients, DirectCoefficients)):
+        return coefficients
+    if coefficients == "fourier":
+        return dae.fourier(harmonics=harmonics, tol=tol)
+    if coefficients == "direct":
+        return DirectCoefficients(dae)
+    raise ValueError("coefficients must be 'fourier', 'direct' or a coefficient object")
+
+
+def _grid(steps: int, samples: int, nb: int) -> tuple[int, int]:
+    """Steps per period (multiple of nb) and a sample count M | steps, nb | M, M >= samples
+    where possible."""
+    steps = int(math.ceil(steps / nb) * nb)
+    cands = [m for m in range(nb, steps + 1, nb) if steps % m == 0 and (steps // m) * m == steps]
+    good = [m for m in cands if m >= samples]
+    M = min(good) if good else max(cands)
+    return steps, M
+
+
+def monodromy(dae: LinearPeriodicDAE, method: str = "radau", steps: Optional[int] = None,
+              fast: Optional[bool] = None, coefficients="fourier", harmonics="auto",
+              fourier_tol: float = 1e-10, samples: int = 128, observed=None,
+              dynamic_dim: Optional[int] = None, store_all: bool = False,
+              full: bool = False) -> Monodromy:
+    """March the consistent subspace over one period (or T/Nb with Fast Floquet).
+
+    full=True marches all n unit vectors instead (the descriptor monodromy, n x n, for
+    diagnostics: it shows the spurious multipliers); Monodromy.eig() then selects the d
+    eigenvectors closest to the consistent subspace."""
+    t_start = time.perf_counter()
+    if method not in ("radau", "paper"):
+        raise ValueError("method must be 'radau' or 'paper'")
+    if fast is None:
+        fast = dae.S is not None
+    if fast and dae.S is None:
+        raise ValueError("fast=True needs S and blades")
+    nb = dae.blades if fast else 1
+    K = DEFAULT_STEPS[method] if steps is None else int(steps)
+    K, M = _grid(K, samples, nb)
+    h = dae.period / K
+    coeffs = _make_coefficients(dae, coefficients, harmonics, fourier_tol)
+    Z, s, d, nf = _consistent_basis(coeffs, h, 0.0, dynamic_dim)
+    diff = np.flatnonzero(dae.differential)
+    if store_all:
+        rows = np.arange(dae.n)
+    else:
+        rows = diff if observed is None else np.asarray(observed, dtype=int)
+        rows = _closure_rows(rows, dae.S if fast else None, nb)
+    stepper = _Stepper(coeffs, method)
+    nsteps = K // nb
+    diff = np.flatnonzero(dae.differential)
+    X0 = np.eye(dae.n) if full else Z
+    Y, smp = stepper.march(X0, 0.0, h, nsteps, store_every=K // M, store_rows=rows)
+    if fast:
+        Y = np.asarray(dae.S.T @ Y)
+    Mat = Y if full else np.linalg.lstsq(Z[diff], Y[diff], rcond=None)[0]
+    mono = Monodromy(matrix=Mat, basis=X0, consistent_basis=Z, samples=smp, sample_rows=rows,
+                     sample_times=np.arange(len(smp)) * (K // M) * h, samples_per_period=M,
+                     fast=bool(fast), blades=nb, method=method, steps=K, marched_steps=nsteps,
+                     n_dynamic=d, settle_singular_values=s, coefficients=coeffs,
+                     factorizations=nf + stepper.factorizations,
+                     wall_time=time.perf_counter() - t_start)
+    mono._diff = diff
+    return mono
+
+
+# --------------------------------------------------------------------------------------------
+@dataclass
+class FloquetResult:
+    """Floquet modal results; arrays have one entry per dynamic multiplier (length d).
+
+    ``exponents`` are resolved (dominant harmonic moved into the exponent), in rad/s;
+    ``frequency_per_rev = Im(eta)/Omega0``, ``real_per_rev = Re(eta)/Omega0``,
+    ``frequency_hz = Im(eta)/(2 pi)``, ``damping_ratio = -Re(eta)/|eta|`` (0 for eta = 0).
+    Conjugate pairs: both members are kept, ``representative`` marks the member with
+    frequency >= 0 (and every real multiplier).  ``eigenvectors[:, i]`` is the Floquet
+    eigenvector x(0) (full state); ``periodic_samples[m, :, i]`` is p_i(t_m) on the rows
+    ``sample_rows`` with x_i(t) = p_i(t) exp(eta_i t).
+    """
+    multipliers: np.ndarray
+    exponents: np.ndarray
+    exponents_principal: np.ndarray
+    frequency_per_rev: np.ndarray
+    real_per_rev: np.ndarray
+    frequency_hz: np.ndarray
+    damping_ratio: np.ndarray
+    harmonic: np.ndarray
+    harmonic_share: np.ndarray
+    representative: np.ndarray
+    eigenvectors: np.ndarray
+    sample_times: np.ndarray
+    sample_rows: np.ndarray
+    _p_unique: np.ndarray = field(repr=False)
+    _n_upper: int = field(repr=False)
+    omega: float
+    period: float
+    method: str
+    steps: int
+    fast: bool
+    blades: int
+    n_dynamic: int
+    wall_time: float
+    timings: dict = field(default_factory=dict)
+
+    @property
+    def periodic_samples(self) -> np.ndarray:
+        """(M, len(sample_rows), d) complex: p_i(t_m), built on demand (conjugate members are
+        the conjugates of their partners)."""
+        P, nu = self._p_unique, self._n_upper
+        return np.concatenate([P[:, :, :nu], np.conj(P[:, :, :nu]), P[:, :, nu:]], axis=2)
+
+    def periodic_sample(self, i: int) -> np.ndarray:
+        """(M, len(sample_rows)) samples of the periodic eigenvector of mode i."""
+        nu = self._n_upper
+        if i < nu:
+            return self._p_unique[:, :, i]
+        if i < 2 * nu:
+            return np.conj(self._p_unique[:, :, i - nu])
+        return self._p_unique[:, :, i - nu]
+
+    def modes(self, sort: bool = True) -> np.ndarray:
+        """Indices of the representative members, sorted by frequency then real part."""
+        idx = np.flatnonzero(self.representative)
+        if sort:
+            idx = idx[np.lexsort((self.real_per_rev[idx], self.frequency_per_rev[idx]))]
+        return idx
+
+    def summary(self) -> str:
+        lines = [f"Floquet: {self.n_dynamic} multipliers, method={self.method}, "
+                 f"steps/period={self.steps}, fast={self.fast}, {self.wall_time * 1e3:.1f} ms",
+                 "   freq/rev     real/rev      freq Hz    damping   |lambda|   k  share"]
+        for i in self.modes():
+            lines.append(f"{self.frequency_per_rev[i]:11.6f} {self.real_per_rev[i]:12.4e} "
+                         f"{self.frequency_hz[i]:12.6f} {self.damping_ratio[i]:10.3e} "
+                         f"{abs(self.multipliers[i]):10.6f} {self.harmonic[i]:3d} "
+                         f"{self.harmonic_share[i]:6.3f}")
+        return "\n".join(lines)
+
+
+def _real_tol(lam: np.ndarray) -> float:
+    """Multipliers with |Im mu| below this are treated as real: 1e-7 (relative) covers the
+    O(sqrt(eps)) splitting of a defective double multiplier at 1 (free yaw angle with a
+    conserved yaw momentum), which would otherwise appear as a spurious tiny frequency."""
+    return 1e-7 * max(1.0, float(np.max(np.abs(lam), initial=1.0)))
+
+
+def floquet_analysis(dae: LinearPeriodicDAE, method: str = "radau", steps: Optional[int] = None,
+                     fast: Optional[bool] = None, samples: int = 128, observed=None,
+                     weights=None, coefficients="fourier", harmonics="auto",
+                     fourier_tol: float = 1e-10, dynamic_dim: Optional[int] = None,
+                     store_all: bool = False) -> FloquetResult:
+    """Floquet multipliers, resolved characteristic exponents and periodic eigenvectors.
+
+    observed : indices of the variables used for the dominant-harmonic analysis (default: all
+        differential variables); weights : per observed variable (default 1), applied to the
+        squared Fourier amplitudes, so that units do not decide.
+    """
+    t0 = time.perf_counter()
+    mono = monodromy(dae, method=method, steps=steps, fast=fast, coefficients=coefficients,
+                     harmonics=harmonics, fourier_tol=fourier_tol, samples=samples,
+                     observed=observed, dynamic_dim=dynamic_dim, store_all=store_all)
+    t1 = time.perf_counter()
+    T, w0, nb = dae.period, dae.omega, mono.blades
+    d = mono.n_dynamic
+    mu, V = mono.eig()
+    # --- canonical conjugate structure: upper members, their conjugates, real ones
+    tol = _real_tol(mu)
+    upper = np.flatnonzero(mu.imag > tol)
+    real = np.flatnonzero(np.abs(mu.imag) <= tol)
+    nlow = int(np.sum(mu.imag < -tol))
+    if nlow != upper.size:     # should not happen for a real matrix
+        upper = np.flatnonzero(mu.imag > 0)
+        real = np.flatnonzero(mu.imag == 0)
+    mus = list(mu[upper]) + [complex(np.real(mu[i]), 0.0) for i in real]
+    vecs = [V[:, i] for i in upper]
+    for i in real:
+        v = V[:, i]
+        j = np.argmax(np.abs(v))
+        vecs.append(np.real(v * np.conj(v[j]) / abs(v[j])))
+    mus = np.array(mus, dtype=complex)
+    Vc = np.column_stack(vecs).astype(complex) if vecs else np.zeros((V.shape[0], 0), complex)
+    nu = upper.size
+    # --- samples of x over the full period: x(t + j tau) = mu^j S^j x(t)
+    obs_rows = mono.sample_rows
+    if observed is None:
+        obs_local = np.flatnonzero(dae.differential[obs_rows])
+    else:
+        pos = {r: i for i, r in enumerate(obs_rows)}
+        obs_local = np.array([pos[int(r)] for r in np.asarray(observed, dtype=int)])
+    w = np.ones(obs_local.size) if weights is None else np.asarray(weights, dtype=float).ravel()
+    if w.size != obs_local.size:
+        raise ValueError("weights must have one entry per observed variable")
+    Xs = np.array(mono.samples)                     # (M/nb, rows, d) real
+    Xm = np.matmul(Xs, Vc)                          # (M/nb, rows, modes)
+    if nb > 1:
+        Srr = dae.S[obs_rows][:, obs_rows].toarray()
+        blocks = [Xm]
+        cur = Xm
+        for j in range(1, nb):
+            cur = np.matmul(Srr, cur) * mus[None, None, :]
+            blocks.append(cur)
+        Xm = np.concatenate(blocks, axis=0)
+    M = Xm.shape[0]
+    tm = np.arange(M) * T / M
+    lam = mus ** nb
+    eta0 = np.log(mus) * nb / T                     # e^{eta0 T} = lambda
+    P = Xm * np.exp(-eta0[None, None, :] * tm[:, None, None])
+    C = np.fft.fft(P[:, obs_local, :], axis=0) / M  # (M, obs, modes)
+    energy = np.einsum("r,krm->km", w, np.abs(C) ** 2)
+    kk = np.fft.fftfreq(M, 1.0 / M).astype(int)
+    harm = np.zeros(len(mus), dtype=int)
+    share = np.zeros(len(mus))
+    for i in range(len(mus)):
+        e = energy[:, i]
+        emax = e.max()
+        cand = np.flatnonzero(e >= emax * (1.0 - 1e-6))
+        freqs = eta0[i].imag + kk[cand] * w0
+        # ties (real eigenvectors): prefer non-negative frequency, then the smallest
+        order = sorted(range(cand.size), key=lambda j: (freqs[j] < -1e-12 * w0, abs(freqs[j])))
+        kb = cand[order[0]]
+        harm[i] = kk[kb]
+        share[i] = emax / max(e.sum(), 1e-300)
+    eta = eta0 + 1j * harm * w0
+    # build the full list: uppers, their conjugates, reals
+    idx_up = np.arange(nu)
+    idx_re = np.arange(nu, len(mus))
+    all_eta = np.concatenate([eta[idx_up], np.conj(eta[idx_up]), eta[idx_re]])
+    all_eta0 = np.concatenate([eta0[idx_up], np.conj(eta0[idx_up]), eta0[idx_re]])
+    all_lam = np.concatenate([lam[idx_up], np.conj(lam[idx_up]), lam[idx_re]])
+    all_h = np.concatenate([harm[idx_up], -harm[idx_up], harm[idx_re]])
+    all_share = np.concatenate([share[idx_up], share[idx_up], share[idx_re]])
+    rep = np.concatenate([eta[idx_up].imag >= 0, eta[idx_up].imag < 0,
+                          np.ones(idx_re.size, bool)])
+    Vfull = mono.basis @ Vc
+    all_V = np.concatenate([Vfull[:, idx_up], np.conj(Vfull[:, idx_up]), Vfull[:, idx_re]], axis=1)
+    Pm = P * np.exp(-1j * harm[None, None, :] * w0 * tm[:, None, None])
+    # normalise: weighted RMS of p over the observed rows = 1, largest component real > 0
+    nrm = np.sqrt(np.einsum("r,mrk->k", w, np.abs(Pm[:, obs_local, :]) ** 2) / M)
+    nrm[nrm == 0] = 1.0
+    Pm = Pm / nrm
+    flat = np.abs(Pm[:, obs_local, :]).reshape(-1, len(mus))
+    jmax = np.argmax(flat, axis=0)
+    big = Pm[:, obs_local, :].reshape(-1, len(mus))[jmax, np.arange(len(mus))]
+    ph = np.where(np.abs(big) > 0, np.conj(big) / np.where(np.abs(big) > 0, np.abs(big), 1.0), 1.0)
+    ph[nu:] = np.where(np.real(ph[nu:]) < 0, -1.0, 1.0)     # real eigenvectors stay real
+    Pm *= ph[None, None, :]
+    scale = ph / nrm
+    Vn = all_V * np.concatenate([scale[:nu], np.conj(scale[:nu]), scale[nu:]])[None, :]
+    absn = np.abs(all_eta)
+    zeta = np.where(absn > 0, -all_eta.real / np.where(absn > 0, absn, 1.0), 0.0)
+    t2 = time.perf_counter()
+    return FloquetResult(
+        multipliers=all_lam, exponents=all_eta, exponents_principal=all_eta0,
+        frequency_per_rev=all_eta.imag / w0, real_per_rev=all_eta.real / w0,
+        frequency_hz=all_eta.imag / (2 * math.pi), damping_ratio=zeta, harmonic=all_h,
+        harmonic_share=all_share, representative=rep, eigenvectors=Vn, sample_times=tm,
+        sample_rows=obs_rows, _p_unique=Pm, _n_upper=nu, omega=w0, period=T, method=method,
+        steps=mono.steps, fast=mono.fast, blades=nb, n_dynamic=d, wall_time=t2 - t0,
+        timings={"monodromy": t1 - t0, "analysis": t2 - t1,
+                 "factorizations": mono.factorizations,
+                 "coefficient_evaluations": getattr(mono.coefficients, "evaluations", None),
+                 "fourier_harmonics": getattr(mono.coefficients, "harmonics", None),
+                 "fourier_error": getattr(mono.coefficients, "error", None)})
