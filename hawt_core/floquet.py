@@ -18,7 +18,8 @@ Methods
     index-3 Hessenberg systems, Hairer & Wanner II, sec. VI.7 and VII.4).
 ``"paper"``
     The paper's finite elements in time: central differencing (implicit midpoint, equal to the
-    trapezoidal rule for constant coefficients), second order, 1000 steps per period by default.
+    trapezoidal rule for constant coefficients) on the differential rows, algebraic rows
+    collocated at the new node; second order, 1000 steps per period by default.
 
 The algebraic and hidden-constraint components are removed by a state-space reduction on the
 consistent subspace: a basis ``Z`` (n x d) of consistent initial values at t = 0 is obtained from
@@ -507,8 +508,8 @@ def _consistent_basis(coeffs, h: float, t_end: float, dynamic_dim: Optional[int]
 
 
 def _numerical_rank(s: np.ndarray, min_gap_decades: float = 4.0) -> int:
-    """Rank at the largest gap in log10(s) that is at least min_gap_decades wide and below
-    s[0]*1e-5 ... the nonzero singular values of the (near-)projector are >= ~1."""
+    """Rank at the largest gap in log10(s) at least min_gap_decades wide whose lower side is
+    below 1e-6 s[0] (the nonzero singular values of the near-projector are >= ~1)."""
     if s.size == 0 or s[0] == 0:
         return 0
     ls = np.log10(np.maximum(s / s[0], 1e-300))
