@@ -110,6 +110,79 @@ def _blade_modes_args(p):
                    help="write the mode shapes to this PNG file")
 
 
+# ---------------------------------------------------------------------------- modes
+def _steps(text: str) -> int:
+    v = _positive_int(text)
+    if not 8 <= v <= 1_000_000:
+        raise argparse.ArgumentTypeError(f"{v} is not allowed; need an integer from 8 to 1000000")
+    return v
+
+
+class _StatusLine:
+    """A one-line progress display on stderr (only when stderr is a terminal)."""
+
+    def __init__(self, enabled: bool):
+        self.enabled = enabled and sys.stderr.isatty()
+
+    def __call__(self, fraction: float, message: str):
+        if self.enabled:
+            bar = "#" * int(20 * fraction)
+            sys.stderr.write(f"\r[{bar:<20}] {100 * fraction:5.1f} % {message:<48}")
+            sys.stderr.flush()
+
+    def close(self):
+        if self.enabled:
+            sys.stderr.write("\r" + " " * 80 + "\r")
+            sys.stderr.flush()
+
+
+@command("modes", help="Floquet modal analysis of the whole turbine (the paper's Table 2)",
+         description="Periodic steady state, exact periodic linearization, monodromy by time "
+                     "marching (Radau IIA, or the paper's central differencing), Fast Floquet, "
+                     "dominant frequencies and automatic labels. Prints a table like the "
+                     "paper's Table 2, or JSON with --json.")
+def cmd_modes(args) -> int:
+    from .modal import modal_analysis
+    turbine = _load(args.turbine)
+    status = _StatusLine(not args.json)
+    try:
+        result = modal_analysis(turbine, elements=args.elements, rotor_speed=args.rotor_speed,
+                                steps=args.steps, method=args.method, progress=status)
+    finally:
+        status.close()
+    result.settings["turbine_file"] = args.turbine
+    written = []
+    if args.plots:
+        import os
+        os.makedirs(args.plots, exist_ok=True)
+        written = result.plot(args.plots)
+    if args.json:
+        print(result.to_json(indent=1))
+    else:
+        print(result.table())
+        for w in written or []:
+            print(f"wrote {w}")
+    return 0
+
+
+@cmd_modes.arguments
+def _modes_args(p):
+    p.add_argument("turbine", nargs="?", default=None, metavar="TURBINE",
+                   help="turbine YAML file (default: the paper's Table 1 turbine)")
+    p.add_argument("--elements", "-n", type=_positive_int, default=None, metavar="N",
+                   help="finite elements per blade (default: the turbine file's)")
+    p.add_argument("--rotor-speed", type=_rotor_speed, default=None, metavar="RAD_PER_S",
+                   help="rotor speed [rad/s] (default: the turbine file's)")
+    p.add_argument("--steps", type=_steps, default=None, metavar="K",
+                   help="time steps per rotor period (default: 400 radau, 1000 paper)")
+    p.add_argument("--method", choices=("radau", "paper"), default="radau",
+                   help="monodromy marching: Radau IIA (default) or the paper's central "
+                        "differencing")
+    p.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    p.add_argument("--plots", metavar="DIR", default=None,
+                   help="write mode-shape pictures (PNG) into this folder")
+
+
 # ---------------------------------------------------------------------------- main
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="hawt", description="Structural dynamics and Floquet stability of "

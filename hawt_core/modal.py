@@ -271,7 +271,8 @@ def label_modes(model: TurbineModel, fl, columns) -> list:
                           frequency_per_rev=float(eta.imag / w0),
                           real_per_rev=float(eta.real / w0),
                           frequency_hz=float(eta.imag / (2 * np.pi)),
-                          damping_ratio=float(-eta.real / abs(eta)) if abs(eta) > 0 else 0.0,
+                          # a zero exponent (free yaw angle) has no damping ratio: report 0
+                          damping_ratio=float(-eta.real / abs(eta)) if abs(eta) > 1e-6 * w0 else 0.0,
                           blade_phase_deg=phase,
                           participation={**{k: float(v) for k, v in rigid.items()},
                                          "elastic": float(elastic),
