@@ -79,6 +79,10 @@ class SingularPencilError(RuntimeError):
     """det(A - lambda E) vanishes identically: the linearized model is not well posed."""
 
 
+_SINGULAR = ("the linearized blade equations are singular (det(A - lambda E) = 0 for all "
+             "lambda): check the section data (zero mass or inertia with zero compliance?)")
+
+
 def deflate_infinite(A: np.ndarray, E: np.ndarray, rank_tol: float = RANK_TOL):
     """Remove the infinite eigenvalues of the regular pencil ``(A, E)``.
 
@@ -110,9 +114,16 @@ def deflate_infinite(A: np.ndarray, E: np.ndarray, rank_tol: float = RANK_TOL):
         if first:
             first = False
             nonzero = np.any(E != 0, axis=1)
-            P = np.eye(m)[:, nonzero]
-            W = np.eye(m)[:, ~nonzero]
             r = int(nonzero.sum())
+            if r == m:
+                break
+            _, sc, Vh = sl.svd(A[~nonzero], full_matrices=True)
+            rc = int((sc > sc[0] * rank_tol).sum()) if sc.size and sc[0] > 0 else 0
+            if rc < m - r:
+                raise SingularPencilError(_SINGULAR)
+            N = Vh[rc:].conj().T
+            A, E, X = A[nonzero] @ N, E[nonzero] @ N, X @ N
+            continue
         else:
             U, s, _ = sl.svd(E)
             r = int((s > s[0] * rank_tol).sum()) if s.size and s[0] > 0 else 0
@@ -123,9 +134,7 @@ def deflate_infinite(A: np.ndarray, E: np.ndarray, rank_tol: float = RANK_TOL):
         _, sc, Vh = sl.svd(C)
         rc = int((sc > sc[0] * rank_tol).sum()) if sc.size and sc[0] > 0 else 0
         if rc < C.shape[0]:
-            raise SingularPencilError(
-                "the linearized blade equations are singular (det(A - lambda E) = 0 for all "
-                "lambda): check the section data (zero mass or inertia with zero compliance?)")
+            raise SingularPencilError(_SINGULAR)
         N = Vh[rc:].conj().T
         A, E, X = P.T @ A @ N, P.T @ E @ N, X @ N
     return A, E, X
@@ -171,7 +180,18 @@ def sparse_modes(A, E, count: int, band: float = np.inf, sigma: float = 0.0):
     op = spl.LinearOperator((n, n), matvec=lambda x: lu.solve(np.asarray(E @ x)),
                             dtype=float)
     k = int(min(2 * count + 6, n - 2))
-    mu, X = spl.eigs(op, k=k, which="LM", ncv=min(n - 1, max(2 * k + 1, 20)))
+    mu = None
+    for ncv in (3 * k, 5 * k):
+        try:
+            mu, X = spl.eigs(op, k=k, which="LM", ncv=int(min(n - 1, max(ncv, 40))))
+            break
+        except spl.ArpackNoConvergence as err:
+            if len(err.eigenvalues) >= min(k, 2 * count):
+                mu, X = err.eigenvalues, err.eigenvectors
+                break
+    if mu is None:
+        raise ConvergenceError(f"sparse eigen-solver: ARPACK did not converge for the lowest "
+                               f"{count} modes; try method='dense'")
     ok = np.abs(mu) > 0
     lam = np.full(mu.shape, np.inf, complex)
     lam[ok] = s + 1.0 / mu[ok]
