@@ -183,6 +183,40 @@ def _modes_args(p):
                    help="write mode-shape pictures (PNG) into this folder")
 
 
+# ---------------------------------------------------------------------------- ROS 2 (lazy)
+#: Subcommands implemented in hawt_ros.cli (they need ROS 2). hawt_core never imports rclpy or
+#: hawt_ros at import time: main() hands ``hawt <one of these> ...`` to hawt_ros.cli.main,
+#: imported only then; the entries below only list them in ``hawt --help``.
+ROS_COMMANDS = {
+    "record": "record live ROS 2 topics into an MCAP file (rosbag2 layout)",
+    "play": "republish the messages of an MCAP file with their original timing",
+    "info": "summarize an MCAP file (topics, types, counts, duration)",
+    "call": "call the hawt node's modal_analysis service and print the modes",
+    "echo": "print the messages arriving on a ROS 2 topic",
+}
+
+
+def _run_ros_command(argv) -> int:
+    try:
+        from hawt_ros.cli import main as ros_main
+    except ImportError as exc:
+        print(f"hawt: error: '{argv[0]}' needs the ROS 2 part of hawt (hawt_ros): {exc}",
+              file=sys.stderr)
+        return EXIT_USAGE
+    return int(ros_main(list(argv)) or 0)
+
+
+def _register_ros_commands():
+    for name, help_text in ROS_COMMANDS.items():
+        COMMANDS[name] = {"help": f"{help_text} [ROS 2; see hawt {name} -h]",
+                          "description": help_text,
+                          "run": lambda args, _n=name: _run_ros_command([_n] + args.rest),
+                          "arguments": lambda p: p.add_argument("rest", nargs=argparse.REMAINDER)}
+
+
+_register_ros_commands()
+
+
 # ---------------------------------------------------------------------------- main
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="hawt", description="Structural dynamics and Floquet stability of "
@@ -195,6 +229,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if argv and argv[0] in ROS_COMMANDS:  # hawt_ros.cli parses its own arguments
+        return _run_ros_command(argv)
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
