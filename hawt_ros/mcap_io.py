@@ -10,10 +10,14 @@ Writing
     (``RIHS01_...``); at close a Metadata record ``rosbag2`` whose ``serialized_metadata``
     is the bag's ``metadata.yaml`` text. Messages are chunked and compressed (zstd by
     default, lz4 or none on request); a chunk is closed when it holds ``chunk_size``
-    bytes or is ``chunk_interval`` seconds old, and every finished chunk goes straight to
-    the operating system (no user-space buffering), so a writer killed with SIGKILL
-    loses at most its open chunk: everything before stays readable by
-    :class:`BagReader` and :func:`bag_info` (which recover unfinalized files).
+    bytes or is ``chunk_interval`` seconds old. The records are built with the ``mcap``
+    package's record classes, but the file is written here: every write is one complete
+    blob (a whole chunk with its message indexes, a schema, an attachment, the summary)
+    straight to the operating system (no user-space buffering), and the writer's state
+    changes only after it. So a writer killed with SIGKILL loses at most its open chunk
+    (everything before stays readable by :class:`BagReader` and :func:`bag_info`, which
+    recover unfinalized files), and an exception raised mid-write by a signal handler
+    (KeyboardInterrupt, SystemExit) neither loses nor duplicates messages at close.
 
     A path ending in ``.mcap`` is written as a bare MCAP file. Any other path is a
     rosbag2 *bag folder*: ``<path>/<name>_0.mcap`` plus ``<path>/metadata.yaml`` written
@@ -57,10 +61,11 @@ import re
 import sys
 import threading
 import time
+import struct
 import weakref
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
-from struct import error as struct_error
 from typing import Any, Dict, Iterable, Iterator, List, Mapping, Optional, Sequence, Tuple
 
 import yaml
@@ -430,10 +435,8 @@ def _yaml(data: Any) -> str:
 # --------------------------------------------------------------------------------------
 
 class _DirectFile:
-    """Write-only file object without user-space buffering: every write goes to the OS at
-    once, so what was written survives a SIGKILL of the process. mcap's Writer only needs
-    write/tell/flush/close (and would wrap a RawIOBase in a BufferedWriter, so this is
-    deliberately not one)."""
+    """Write-only file without user-space buffering: every write goes to the OS at once,
+    so what was written survives a SIGKILL of the process."""
 
     def __init__(self, path: Path):
         self._fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
@@ -466,6 +469,201 @@ class _DirectFile:
     @property
     def closed(self) -> bool:
         return self._fd < 0
+
+
+MCAP_MAGIC = b"\x89MCAP0\r\n"
+
+
+def _record_bytes(record: Any) -> bytes:
+    from mcap.data_stream import RecordBuilder
+
+    builder = RecordBuilder()
+    record.write(builder)
+    return bytes(builder.end())
+
+
+class _McapFile:
+    """Minimal chunked MCAP writer (records and summary as the mcap package writes them)
+    whose every file write is ONE complete blob (a whole chunk with its message indexes, an
+    attachment, a metadata record, the whole summary), and whose in-memory state changes
+    only after the write. So an exception raised anywhere by a signal handler
+    (KeyboardInterrupt, SystemExit) leaves file and state consistent, and a SIGKILL leaves
+    a file whose every complete chunk is readable. Schemas and channels are written to the
+    data section (outside chunks) as they are registered, and repeated in the summary."""
+
+    def __init__(self, f: "_DirectFile", profile: str, library: str, compression: str):
+        from mcap.records import Header
+
+        self.f = f
+        self.compression = compression
+        if compression == "zstd":
+            import zstandard
+
+            self._compress = zstandard.compress
+        elif compression == "lz4":
+            import lz4.frame
+
+            self._compress = lz4.frame.compress
+        else:
+            self._compress = None
+        self.schemas: Dict[int, Any] = {}
+        self.channels: Dict[int, Any] = {}
+        self.chunk_indexes: List[Any] = []
+        self.attachment_indexes: List[Any] = []
+        self.metadata_indexes: List[Any] = []
+        self.channel_counts: Dict[int, int] = {}
+        self.message_count = 0
+        self.start_time = 0
+        self.end_time = 0
+        self._reset_chunk()
+        self.f.write(MCAP_MAGIC + _record_bytes(Header(profile=profile, library=library)))
+
+    def _reset_chunk(self) -> None:
+        self.chunk_parts: List[bytes] = []
+        self.chunk_size = 0
+        self.chunk_index: Dict[int, List[Tuple[int, int]]] = {}
+        self.chunk_start = 0
+        self.chunk_end = 0
+        self.chunk_messages = 0
+
+    def add_schema(self, name: str, encoding: str, data: bytes) -> int:
+        from mcap.records import Schema
+
+        schema = Schema(id=len(self.schemas) + 1, name=name, encoding=encoding, data=data)
+        self.f.write(_record_bytes(schema))
+        self.schemas[schema.id] = schema
+        return schema.id
+
+    def add_channel(self, topic: str, message_encoding: str, schema_id: int,
+                    metadata: Dict[str, str]) -> int:
+        from mcap.records import Channel
+
+        channel = Channel(id=len(self.channels) + 1, topic=topic,
+                          message_encoding=message_encoding, schema_id=schema_id,
+                          metadata=dict(metadata))
+        self.f.write(_record_bytes(channel))
+        self.channels[channel.id] = channel
+        self.channel_counts[channel.id] = 0
+        return channel.id
+
+    def add_message(self, channel_id: int, log_time: int, publish_time: int, sequence: int,
+                    data: bytes) -> None:
+        from mcap.records import Message
+
+        blob = _record_bytes(Message(channel_id=channel_id, log_time=log_time, data=data,
+                                     publish_time=publish_time, sequence=sequence))
+        offset = self.chunk_size
+        self.chunk_parts.append(blob)
+        self.chunk_size += len(blob)
+        self.chunk_index.setdefault(channel_id, []).append((log_time, offset))
+        if self.chunk_messages == 0:
+            self.chunk_start = self.chunk_end = log_time
+        else:
+            self.chunk_start = min(self.chunk_start, log_time)
+            self.chunk_end = max(self.chunk_end, log_time)
+        self.chunk_messages += 1
+
+    def flush_chunk(self) -> None:
+        from mcap.records import Chunk, ChunkIndex, MessageIndex
+
+        if self.chunk_messages == 0:
+            return
+        data = b"".join(self.chunk_parts)
+        compressed = self._compress(data) if self._compress else data
+        chunk_bytes = _record_bytes(Chunk(
+            compression=self.compression, data=compressed,
+            message_start_time=self.chunk_start, message_end_time=self.chunk_end,
+            uncompressed_crc=zlib.crc32(data), uncompressed_size=len(data)))
+        start = self.f.tell()
+        index_parts, offsets, pos = [], {}, start + len(chunk_bytes)
+        for cid, recs in self.chunk_index.items():
+            b = _record_bytes(MessageIndex(channel_id=cid, records=list(recs)))
+            offsets[cid] = pos
+            pos += len(b)
+            index_parts.append(b)
+        index_bytes = b"".join(index_parts)
+        chunk_index = ChunkIndex(
+            message_start_time=self.chunk_start, message_end_time=self.chunk_end,
+            chunk_start_offset=start, chunk_length=len(chunk_bytes),
+            message_index_offsets=offsets, message_index_length=len(index_bytes),
+            compression=self.compression, compressed_size=len(compressed),
+            uncompressed_size=len(data))
+        counts = {cid: len(recs) for cid, recs in self.chunk_index.items()}
+        first = self.message_count == 0
+        self.f.write(chunk_bytes + index_bytes)          # one write: chunk + its indexes
+        # --- commit (the chunk is in the file) ---
+        self.chunk_indexes.append(chunk_index)
+        for cid, n in counts.items():
+            self.channel_counts[cid] = self.channel_counts.get(cid, 0) + n
+        self.message_count += sum(counts.values())
+        self.start_time = self.chunk_start if first else min(self.start_time, self.chunk_start)
+        self.end_time = self.chunk_end if first else max(self.end_time, self.chunk_end)
+        self._reset_chunk()
+
+    def add_attachment(self, name: str, media_type: str, data: bytes, log_time: int,
+                       create_time: int) -> None:
+        from mcap.records import Attachment, AttachmentIndex
+
+        blob = _record_bytes(Attachment(create_time=create_time, log_time=log_time, name=name,
+                                        media_type=media_type, data=data))
+        offset = self.f.tell()
+        self.f.write(blob)
+        self.attachment_indexes.append(AttachmentIndex(
+            offset=offset, length=len(blob), log_time=log_time, create_time=create_time,
+            data_size=len(data), name=name, media_type=media_type))
+
+    def add_metadata(self, name: str, data: Dict[str, str]) -> None:
+        from mcap.records import Metadata, MetadataIndex
+
+        blob = _record_bytes(Metadata(name=name, metadata=dict(data)))
+        offset = self.f.tell()
+        self.f.write(blob)
+        self.metadata_indexes.append(MetadataIndex(offset=offset, length=len(blob), name=name))
+
+    def finish(self) -> None:
+        """Flush the open chunk, then write DataEnd, summary, footer and magic (one write)."""
+        from mcap.opcode import Opcode
+        from mcap.records import DataEnd, Footer, Statistics, SummaryOffset
+
+        self.flush_chunk()
+        data_end = _record_bytes(DataEnd(data_section_crc=0))
+        summary_start = self.f.tell() + len(data_end)
+        groups = [
+            (Opcode.SCHEMA, list(self.schemas.values())),
+            (Opcode.CHANNEL, list(self.channels.values())),
+            (Opcode.STATISTICS, [Statistics(
+                attachment_count=len(self.attachment_indexes),
+                channel_count=len(self.channels),
+                channel_message_counts=dict(self.channel_counts),
+                chunk_count=len(self.chunk_indexes),
+                message_count=self.message_count,
+                message_end_time=self.end_time,
+                message_start_time=self.start_time,
+                metadata_count=len(self.metadata_indexes),
+                schema_count=len(self.schemas))]),
+            (Opcode.CHUNK_INDEX, self.chunk_indexes),
+            (Opcode.ATTACHMENT_INDEX, self.attachment_indexes),
+            (Opcode.METADATA_INDEX, self.metadata_indexes),
+        ]
+        parts, offsets, pos = [], [], summary_start
+        for opcode, records in groups:
+            if not records:
+                continue
+            blob = b"".join(_record_bytes(r) for r in records)
+            offsets.append(SummaryOffset(group_opcode=opcode, group_start=pos,
+                                         group_length=len(blob)))
+            parts.append(blob)
+            pos += len(blob)
+        summary_offset_start = pos
+        parts.extend(_record_bytes(o) for o in offsets)
+        summary = b"".join(parts)
+        crc = zlib.crc32(summary)
+        crc = zlib.crc32(struct.pack("<BQQQ", Opcode.FOOTER, 8 + 8 + 4, summary_start,
+                                     summary_offset_start), crc)
+        footer = _record_bytes(Footer(summary_start=summary_start,
+                                      summary_offset_start=summary_offset_start,
+                                      summary_crc=crc))
+        self.f.write(data_end + summary + footer + MCAP_MAGIC)
 
 
 _open_writers: "weakref.WeakSet[BagWriter]" = weakref.WeakSet()
@@ -547,8 +745,6 @@ class BagWriter:
         ros_distro: Optional[str] = None,
         close_at_exit: bool = True,
     ):
-        from mcap.writer import CompressionType, Writer
-
         path = Path(path)
         if path.suffix == ".mcap":
             self.bag_dir: Optional[Path] = None
@@ -560,9 +756,7 @@ class BagWriter:
             path.mkdir(parents=True, exist_ok=True)
             self.bag_dir = path
             self.path = path / f"{path.name}_0.mcap"
-        comp = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4,
-                "none": CompressionType.NONE, "": CompressionType.NONE}
-        if compression not in comp:
+        if compression not in ("zstd", "lz4", "none", ""):
             raise ValueError(f"compression must be 'zstd', 'lz4' or 'none', not {compression!r}")
         self.compression = "" if compression in ("none", "") else compression
         self.chunk_size = int(chunk_size)
@@ -576,13 +770,9 @@ class BagWriter:
         self._close_pending = False
         self._closed = False
         self._file = _DirectFile(self.path)
-        # mcap's own size-based chunking is disabled (huge chunk_size): this class decides.
-        self._writer = Writer(self._file, chunk_size=1 << 62, compression=comp[compression],
-                              enable_crcs=True)
-        self._writer.start(profile=PROFILE, library=self._library())
+        self._mcap = _McapFile(self._file, PROFILE, self._library(), self.compression)
         self._topics: Dict[str, _Topic] = {}
         self._schemas: Dict[str, int] = {}
-        self._pending_bytes = 0
         self._pending_since: Optional[float] = None
         self._last_default_time = 0
         self.message_count = 0
@@ -647,9 +837,7 @@ class BagWriter:
                     self.close()
 
     def _flush_chunk(self) -> None:
-        if self._pending_since is not None:
-            self._writer.flush()
-        self._pending_bytes = 0
+        self._mcap.flush_chunk()
         self._pending_since = None
 
     # ---- public API --------------------------------------------------------------------
@@ -685,15 +873,14 @@ class BagWriter:
             definition = message_definition(type_name, self.extra_msg_paths)
         schema_id = self._schemas.get(type_name)
         if schema_id is None:
-            schema_id = self._writer.register_schema(type_name, SCHEMA_ENCODING,
-                                                     definition.encode())
+            schema_id = self._mcap.add_schema(type_name, SCHEMA_ENCODING, definition.encode())
             self._schemas[type_name] = schema_id
         qos_list = [qos_dict(q) for q in qos] if isinstance(qos, (list, tuple)) else [qos_dict(qos)]
         thash = type_hash(type_name, self.extra_msg_paths)
         metadata = {"offered_qos_profiles": _yaml(qos_list).strip()}
         if thash:
             metadata["topic_type_hash"] = thash
-        channel_id = self._writer.register_channel(topic, MESSAGE_ENCODING, schema_id, metadata)
+        channel_id = self._mcap.add_channel(topic, MESSAGE_ENCODING, schema_id, metadata)
         t = _Topic(topic, type_name, channel_id, definition, qos_list, thash)
         self._topics[topic] = t
         return t
@@ -726,16 +913,15 @@ class BagWriter:
                 lt = _time_ns(log_time)
             pt = lt if publish_time is None else _time_ns(publish_time)
             t.count += 1
-            self._writer.add_message(t.channel_id, log_time=lt, data=bytes(data),
-                                     publish_time=pt, sequence=t.count)
+            self._mcap.add_message(t.channel_id, log_time=lt, publish_time=pt,
+                                   sequence=t.count, data=bytes(data))
             self.message_count += 1
             self.start_time = lt if self.start_time is None else min(self.start_time, lt)
             self.end_time = lt if self.end_time is None else max(self.end_time, lt)
-            self._pending_bytes += len(data) + 31
             now = time.monotonic()
             if self._pending_since is None:
                 self._pending_since = now
-            if self._pending_bytes >= self.chunk_size or (
+            if self._mcap.chunk_size >= self.chunk_size or (
                     self.chunk_interval and now - self._pending_since >= self.chunk_interval):
                 self._flush_chunk()
         finally:
@@ -751,8 +937,8 @@ class BagWriter:
             raise ValueError("BagWriter is closed")
         try:
             now = time.time_ns()
-            self._writer.add_attachment(create_time=now, log_time=log_time or now, name=name,
-                                        media_type=media_type, data=data)
+            self._mcap.add_attachment(name, media_type, data, log_time=log_time or now,
+                                      create_time=now)
         finally:
             self._release()
 
@@ -761,7 +947,7 @@ class BagWriter:
         if not self._acquire():
             raise ValueError("BagWriter is closed")
         try:
-            self._writer.add_metadata(name, {str(k): str(v) for k, v in data.items()})
+            self._mcap.add_metadata(name, {str(k): str(v) for k, v in data.items()})
         finally:
             self._release()
 
@@ -801,8 +987,10 @@ class BagWriter:
             self._stop.set()
             try:
                 self._flush_chunk()
-                self._writer.add_metadata("rosbag2", {"serialized_metadata": self._metadata_yaml()})
-                self._writer.finish()
+                self._mcap.flush_chunk()
+                self._mcap.add_metadata("rosbag2",
+                                        {"serialized_metadata": self._metadata_yaml()})
+                self._mcap.finish()
             finally:
                 self._closed = True
                 self._file.close()
@@ -914,7 +1102,7 @@ def _iter_records(path: Path, scan: _Scan) -> Iterator[Any]:
                 rec = next(records)
             except StopIteration:
                 break
-            except (McapError, EOFError, ValueError, struct_error, OSError, MemoryError) as exc:
+            except (McapError, EOFError, ValueError, struct.error, OSError, MemoryError) as exc:
                 scan.truncated = True
                 scan.error = f"{type(exc).__name__}: {exc}"
                 break

@@ -522,3 +522,48 @@ def test_writer_api_edges(tmp_path):
     assert info["topics"]["/settings"]["count"] == 1
     with pytest.raises(FileExistsError):
         BagWriter(tmp_path)  # a non-empty folder is never overwritten
+
+
+def test_crcs_and_indexes_valid(written_bag):
+    """Chunk CRCs, summary CRC and the message indexes agree with the data."""
+    from mcap.reader import make_reader
+    from mcap.stream_reader import StreamReader
+
+    path, messages = written_bag
+    with open(path, "rb") as f:
+        records = list(StreamReader(f, validate_crcs=True).records)
+    assert sum(type(r).__name__ == "Message" for r in records) == len(messages)
+    with open(path, "rb") as f:
+        reader = make_reader(f, validate_crcs=True)
+        # indexed reading by topic and time range uses chunk and message indexes
+        got = [m.log_time for _, _, m in reader.iter_messages(topics=["/markers"],
+                                                                starting_at=T0 + 10 * DT,
+                                                                ending_before=T0 + 20 * DT)]
+    assert got == [T0 + i * DT + 3 for i in range(10, 20)]
+
+
+def test_exception_during_chunk_write_leaves_consistent_file(tmp_path, monkeypatch):
+    """A KeyboardInterrupt raised while a chunk is written (e.g. by a signal handler) must
+    neither lose nor duplicate messages once the writer is closed."""
+    path = tmp_path / "interrupted.mcap"
+    w = BagWriter(path, chunk_size=1 << 30, chunk_interval=None)
+    for i in range(10):
+        w.write("/joint_states", joint_state(i, T0 + i), T0 + i)
+    real_write = mcap_io._DirectFile.write
+    calls = {"n": 0}
+
+    def failing_write(self, data):
+        calls["n"] += 1
+        if calls["n"] == 1:
+            raise KeyboardInterrupt
+        return real_write(self, data)
+
+    monkeypatch.setattr(mcap_io._DirectFile, "write", failing_write)
+    with pytest.raises(KeyboardInterrupt):
+        w.flush()
+    monkeypatch.setattr(mcap_io._DirectFile, "write", real_write)
+    w.write("/joint_states", joint_state(10, T0 + 10), T0 + 10)
+    w.close()
+    read, _ = rosbags_read(path)
+    assert [t for _, _, t, _ in read] == [T0 + i for i in range(11)]
+    assert bag_info(path)["message_count"] == 11
