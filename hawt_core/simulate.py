@@ -640,7 +640,9 @@ class Simulator:
                     return None, it, dn, f"Newton diverging (contraction {theta:.2f})"
                 eta = theta / (1 - theta)
                 self._theta = theta
-            if (eta if it else max(eta, 1e-2)) * dn <= tol or dn <= 1e-3 * tol:
+            if (eta if it else max(eta, 1e-2)) * dn <= tol or dn <= 1e-3 * tol \
+                    or (it >= 3 and dn <= 1e-9):   # round-off floor of the residual
+
                 self._eta = eta
                 return x, it + 1, dn, ""
             dn_old = dn
