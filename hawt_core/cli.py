@@ -217,6 +217,21 @@ def _register_ros_commands():
 _register_ros_commands()
 
 
+# ---------------------------------------------------------------------------- simulate
+# `hawt simulate`: defined in hawt_core.simulate (cmd_simulate, add_arguments).
+def _register_simulate():
+    from .simulate import add_arguments, cmd_simulate
+    run = command("simulate", help="nonlinear time simulation",
+                  description="Nonlinear time simulation (implicit midpoint, finite elements "
+                              "in time) from the steady state plus perturbations; prints a "
+                              "summary (JSON with --json), writes time histories with "
+                              "--output.")(cmd_simulate)
+    run.arguments(add_arguments)
+
+
+_register_simulate()
+
+
 # ---------------------------------------------------------------------------- main
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="hawt", description="Structural dynamics and Floquet stability of "
