@@ -17,6 +17,8 @@ trap 'rm -rf "$ROS_LOG_DIR"' EXIT
 # The venv has ROS: the ROS tests must run, not skip (tests/test_*: HAWT_REQUIRE_ROS).
 export HAWT_REQUIRE_ROS="${HAWT_REQUIRE_ROS:-1}"
 export MPLBACKEND=Agg
+# One BLAS thread per process: on 2 cores, threaded BLAS in several test processes thrashes.
+export OPENBLAS_NUM_THREADS="${OPENBLAS_NUM_THREADS:-1}" OMP_NUM_THREADS="${OMP_NUM_THREADS:-1}"
 # Let the ROS wheels' start-up hook set LD_LIBRARY_PATH for THIS venv, and drop library
 # folders of other venvs an outer process may have left in it.
 unset _ROS_WHEELS_BOOTSTRAP_COMPLETE
