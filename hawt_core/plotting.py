@@ -9,6 +9,8 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+import numpy as np
+
 
 def _pyplot():
     import matplotlib
@@ -51,3 +53,309 @@ def plot_blade_modes(result, path, count: int = 6) -> Path:
     fig.savefig(path, format="png", dpi=100)
     plt.close(fig)
     return path
+
+
+# ============================================================================ turbine modes
+# ``plot_turbine_modes(result, path_or_dir, modes=None)``: Floquet mode shapes of a ModalResult
+# drawn like the paper's Figs. 1-12 (see the function's docstring).
+
+#: Instants of the modal oscillation drawn in each picture (phases 0, 90, 180, 270 deg).
+MODE_INSTANTS = 4
+#: Largest drawn displacement, as a fraction of the rotor radius.
+MODE_AMPLITUDE = 0.12
+#: Largest drawn twist in the rod illustration [rad].
+TWIST_AMPLITUDE = math.radians(60.0)
+
+
+def _ordinal(k: int) -> str:
+    return {1: "1st", 2: "2nd", 3: "3rd"}.get(k, f"{k}th")
+
+
+def mode_label(mode) -> str:
+    """'1st antisymmetric flap', 'teeter', 'yaw 2', ... (the paper's figure captions)."""
+    if mode.family in ("yaw", "teeter") or not mode.symmetry:
+        return mode.family if mode.index == 1 else f"{mode.family} {mode.index}"
+    return f"{_ordinal(mode.index)} {mode.symmetry} {mode.family}"
+
+
+def mode_file_stem(position: int, mode) -> str:
+    """'03_flap_antisymmetric_1' (position counts from 1 in the selection)."""
+    parts = [f"{position:02d}", mode.family]
+    if mode.symmetry:
+        parts.append(mode.symmetry)
+    parts.append(str(mode.index))
+    return "_".join(parts)
+
+
+def table2_modes(result) -> list:
+    """The modes of the paper's Table 2: the rigid teeter and yaw modes (index 1) and the first
+    two of every elastic (family, symmetry) pair, in the result's (frequency) order."""
+    out = []
+    for m in result.modes:
+        if m.family in ("yaw", "teeter"):
+            if m.index == 1:
+                out.append(m)
+        elif m.index <= 2:
+            out.append(m)
+    return out
+
+
+def _select_modes(result, modes):
+    if modes is None:
+        return table2_modes(result)
+    out = []
+    for m in modes:
+        if isinstance(m, (int,)) and not isinstance(m, bool):
+            out.append(result.modes[m])
+        elif isinstance(m, (tuple, list)):
+            out.append(result.find(*m))
+        elif isinstance(m, str):
+            words = m.replace("_", " ").split()
+            idx = int(words[-1]) if words and words[-1].isdigit() else 1
+            words = [w for w in words if not w.isdigit()]
+            out.append(result.find(words[0], words[1] if len(words) > 1 else None, idx))
+        else:
+            out.append(m)
+    return out
+
+
+class _ModeGeometry:
+    """Exact rigid-body + blade kinematics of a TurbineModel, linearized about the undeformed
+    rotor, in the nominal rotating shaft frame (s1: blade 0's span at rest, s2: lateral, s3:
+    along the shaft); used to turn a periodic eigenvector into drawn displacements."""
+
+    def __init__(self, model):
+        self.model = model
+        self.rigid = model.rigid
+        self.lay = model.layout
+        self.nb = model.n_blades
+        self.nodes = np.asarray(model.beam.props.nodes, float)      # (N+1,) span from root
+        self.coords = [c for c in self.rigid.coordinates]
+        self.R = float(model.turbine.hub.radius + model.turbine.blade.length)
+
+    def points(self, q, u, t):
+        """(Nb, N+1, 3) blade axis points and (3,) teeter-axis point, shaft-frame coordinates;
+        ``q`` rigid coordinates (n_q,), ``u`` (Nb, N+1, 3) blade displacements (root frame)."""
+        rg = self.rigid
+        fr = rg.frames(np.asarray(q, float), t)
+        S0 = rg.frames(np.zeros(rg.n_q), t)["S"]
+        H, B, S = fr["H"], fr["B"], fr["S"]
+        hub = rg.d * S[:, 2]
+        pts = np.empty((self.nb, len(self.nodes), 3))
+        for k in range(self.nb):
+            root = hub + H @ rg.root_offset_hub[k]
+            local = np.zeros((len(self.nodes), 3))
+            local[:, 0] = self.nodes
+            local = local + u[k]
+            pts[k] = root[None, :] + local @ B[k].T
+        return pts @ S0, hub @ S0
+
+    def root_bases(self, t):
+        """(Nb, 3, 3) blade root bases at rest in the shaft frame (columns b1, b2, b3)."""
+        rg = self.rigid
+        fr = rg.frames(np.zeros(rg.n_q), t)
+        return np.einsum("ji,kjl->kil", fr["S"], fr["B"])
+
+    def split(self, x):
+        """Rigid coordinates (n_q,) and blade u, theta (Nb, N+1, 3) of a real state vector."""
+        q = np.array([x[self.lay[c]] for c in self.coords], float)
+        u = np.zeros((self.nb, len(self.nodes), 3))
+        th = np.zeros_like(u)
+        for k in range(self.nb):
+            b = self.lay.blade(k)
+            u[k, 1:] = x[b.u[1:]]
+            th[k, 1:] = x[b.theta[1:]]
+        return q, u, th
+
+    def displacement(self, x, t):
+        """Linearized displacement of the blade axes (Nb, N+1, 3), of the hub (3,), and the
+        twist theta1 (Nb, N+1) for the real perturbation ``x`` at time t."""
+        q, u, th = self.split(x)
+        size = max(np.abs(q).max(initial=0.0) * self.R, np.abs(u).max(initial=0.0), 1e-300)
+        eps = 1e-6 / size                        # a perturbation of ~1 micrometre
+        P0, h0 = self.points(np.zeros_like(q), np.zeros_like(u), t)
+        P1, h1 = self.points(eps * q, eps * u, t)
+        return (P1 - P0) / eps, (h1 - h0) / eps, th[:, :, 0]
+
+
+def mode_snapshots(result, mode, instants: int = MODE_INSTANTS):
+    """Real motions of ``mode`` at ``instants`` evenly spaced phases from 0 to 180 deg of one
+    cycle of its dominant frequency (over one rotor period for a non-oscillating mode).
+
+    x(t) = Re(p(t) exp(i Im(eta) t)) with p the periodic Floquet eigenvector (Fourier-
+    interpolated from the result's samples) and eta its characteristic exponent; the growth
+    or decay exp(Re(eta) t) is left out, and the complex phase is chosen so that the largest
+    displacement-like entry is at its maximum at the first instant. Returns (times (J,),
+    phases_deg (J,), states (J, n) real)."""
+    fl = result.floquet
+    model = result.model
+    times, P = result.shape_samples(mode)
+    M = P.shape[0]
+    omega0 = model.rotor_speed
+    c = np.fft.fft(P, axis=0) / M
+    k = np.fft.fftfreq(M, 1.0 / M)
+    eta = complex(fl.exponents[mode.column])
+    w_mode = mode.frequency_per_rev * omega0
+    J = max(1, int(instants))
+    if abs(w_mode) > 1e-6 * omega0:
+        # phases 0 .. 180 deg (0, 60, 120, 180 for four instants): a standing (real) mode shows
+        # four different amplitudes, a travelling one its motion
+        tj = np.arange(J) * (np.pi / abs(w_mode)) / max(1, J - 1)
+    else:
+        tj = np.arange(J) * model.period / J
+    pj = np.exp(1j * np.outer(tj, k) * omega0) @ c             # (J, n) periodic part
+    xj = pj * np.exp(1j * eta.imag * tj)[:, None]
+    # the phase: largest displacement-like entry (tip metres) real at t = 0
+    from .modal import _display_rows
+    rows, wts = _display_rows(model)
+    z = xj[0, rows] * wts
+    i = int(np.argmax(np.abs(z)))
+    if abs(z[i]) > 0:
+        xj = xj * (abs(z[i]) / z[i])
+    phases = np.degrees(np.angle(np.exp(1j * w_mode * tj))) % 360.0 if abs(w_mode) > 1e-6 * omega0 \
+        else 360.0 * np.arange(J) / J
+    return tj, phases, np.real(xj)
+
+
+def _draw_rotor(ax, pts, hub, root_pts, view, **kw):
+    """One rotor picture in ``view`` ('front': s2 right, s1 up; 'side': s3 right, s1 up)."""
+    ix = 1 if view == "front" else 2
+    lines = []
+    for k in range(pts.shape[0]):
+        lines += ax.plot(pts[k, :, ix], pts[k, :, 0], **kw)
+        lines += ax.plot([hub[ix], root_pts[k, ix]], [hub[0], root_pts[k, 0]], **kw)
+    return lines
+
+
+def _draw_mode(axes, result, mode, instants=MODE_INSTANTS):
+    """Front view, side view (and the twist illustration for torsion modes) on ``axes``."""
+    geom = _ModeGeometry(result.model)
+    tj, phases, X = mode_snapshots(result, mode, instants)
+    P0, h0 = geom.points(np.zeros(len(geom.coords)), np.zeros((geom.nb, len(geom.nodes), 3)), 0.0)
+    disp = [geom.displacement(X[j], tj[j]) for j in range(len(tj))]
+    big = max(max(np.abs(d[0]).max(), np.abs(d[1]).max()) for d in disp)
+    twist = max(np.abs(d[2]).max() for d in disp)
+    # one amplification for displacements and twist: the largest displacement is 12 % of R or
+    # the largest twist 60 deg, whichever comes first (a torsion mode's tiny bending stays tiny)
+    amp = min(MODE_AMPLITUDE * geom.R / big if big > 0 else np.inf,
+              TWIST_AMPLITUDE / twist if twist > 0 else np.inf)
+    amp = amp if np.isfinite(amp) else 1.0
+    cmap = _pyplot().get_cmap("viridis")
+    R = geom.R
+    for ax, view in zip(axes[:2], ("front", "side")):
+        _draw_rotor(ax, P0, h0, P0[:, 0], view, color="0.55", ls="--", lw=1.0)
+        ax.plot([0.0, h0[1 if view == "front" else 2]], [0.0, h0[0]], color="0.75", lw=3,
+                solid_capstyle="round", zorder=0)                       # shaft to the yaw axis
+        for j, (dP, dh, _) in enumerate(disp):
+            col = cmap(j / max(1, len(disp) - 1) * 0.9)
+            pts, hub = P0 + amp * dP, h0 + amp * dh
+            ln = _draw_rotor(ax, pts, hub, pts[:, 0], view, color=col, lw=1.8)
+            ln[0].set_label(f"phase {phases[j]:.0f}°")
+            ix = 1 if view == "front" else 2
+            ax.plot([hub[ix]], [hub[0]], "o", color=col, ms=5)
+        ax.plot([h0[1 if view == "front" else 2]], [h0[0]], "o", mfc="none", mec="0.4", ms=9)
+        ax.set_aspect("equal", adjustable="box")
+        ax.set_ylim(-1.1 * R, 1.1 * R)
+        ax.grid(True, alpha=0.25)
+    axes[0].set_xlim(-0.45 * R, 0.45 * R)
+    axes[0].set_title("rotor plane (looking upwind), rotating with the rotor", fontsize=9)
+    axes[0].set_xlabel("lateral $s_2$ [m]")
+    axes[0].set_ylabel("blade 1 span $s_1$ [m]")
+    axes[1].set_xlim(h0[2] - 0.45 * R, h0[2] + 0.45 * R)
+    axes[1].set_title("side view", fontsize=9)
+    axes[1].set_xlabel("shaft axis $s_3$ [m]")
+    axes[0].legend(fontsize=7, loc="lower left")
+    if len(axes) > 2 and axes[2] is not None:
+        _draw_twist(axes[2], geom, disp[0][2], P0, amp)
+    return amp
+
+
+def _draw_twist(ax, geom, theta1, P0, amp):
+    """The paper's torsion illustration: a straight line drawn on a circular rod along each
+    blade (front view), twisted by the mode's theta1 (amplified to TWIST_AMPLITUDE)."""
+    R = geom.R
+    rho = 0.06 * R
+    shown = np.degrees(amp * np.abs(theta1).max())
+    bases = geom.root_bases(0.0)
+    s = np.linspace(0.0, 1.0, 200)
+    for k in range(geom.nb):
+        span = np.interp(s, np.linspace(0, 1, len(geom.nodes)), geom.nodes)
+        axis_pts = np.array([np.interp(span, geom.nodes, P0[k, :, c]) for c in range(3)]).T
+        phi = amp * np.interp(span, geom.nodes, theta1[k])
+        b2, b3 = bases[k][:, 1], bases[k][:, 2]
+        d = np.sin(phi)[:, None] * b2[None] - np.cos(phi)[:, None] * b3[None]
+        x0, y0 = axis_pts[:, 1], axis_pts[:, 0]
+        ax.plot(x0 - rho, y0, color="0.3", lw=1)
+        ax.plot(x0 + rho, y0, color="0.3", lw=1)
+        ax.plot([x0[0] - rho, x0[0] + rho], [y0[0], y0[0]], color="0.3", lw=1)
+        ax.plot([x0[-1] - rho, x0[-1] + rho], [y0[-1], y0[-1]], color="0.3", lw=1)
+        ax.plot(x0, y0, color="0.55", ls="--", lw=1, label="untwisted line" if k == 0 else None)
+        vis = (-d[:, 2]) >= 0
+        xl = x0 + rho * d[:, 1]
+        ax.plot(np.where(vis, xl, np.nan), y0, color="C3", lw=2,
+                label="twisted line" if k == 0 else None)
+        ax.plot(np.where(~vis, xl, np.nan), y0, color="C3", lw=1, ls=":")
+    ax.set_xlim(-4 * rho, 4 * rho)
+    ax.set_ylim(-1.1 * R, 1.1 * R)
+    ax.set_title(f"twist: line on a rod (phase 0, max {shown:.0f}° shown)",
+                 fontsize=9)
+    ax.set_xlabel("lateral [m]")
+    ax.legend(fontsize=7, loc="lower left")
+
+
+def _mode_title(result, mode) -> str:
+    pr = mode.frequency_per_rev
+    digits = 4 if mode.family == "torsion" else 2
+    return f"{mode_label(mode)} ({pr:.{digits}f} /rev)"
+
+
+def plot_turbine_modes(result, path_or_dir, modes=None) -> list:
+    """Mode-shape pictures of a ModalResult like the paper's Figs. 1-12.
+
+    ``modes``: None (the Table 2 modes: teeter, yaw and the first two of each (family,
+    symmetry)), or a list of Mode objects, indices into ``result.modes``, (family, symmetry,
+    index) tuples or strings like "flap antisymmetric 1".  ``path_or_dir``: an existing
+    directory (or a path without a suffix, created) gets one PNG per mode named
+    ``NN_family[_symmetry]_index.png``; otherwise one PNG file with a row per mode.
+
+    Each picture shows the two-bladed (any-bladed) rotor seen with the rotor (the camera
+    turns with the shaft, blade 1 up): the rotor-plane view and a side view, the undeformed
+    rotor dashed and the deformed one solid at four phases of one cycle of the mode's dominant
+    frequency, from the periodic Floquet eigenvector (yaw, teeter and blade u in the exact
+    kinematics of hawt_core.rigid, linearized), amplified so that the largest displacement is
+    12 % of the rotor radius. Yaw shows as a displacement and rotation of the hub, teeter as a
+    rigid rotation of the rotor. Torsion modes get a third panel: the paper's straight line on a
+    circular rod along each blade, twisted by theta1. Returns the written paths."""
+    plt = _pyplot()
+    sel = _select_modes(result, modes)
+    if not sel:
+        raise ValueError("plot: no modes to plot")
+    target = Path(path_or_dir)
+    per_mode = target.is_dir() or target.suffix == ""
+    written = []
+    if per_mode:
+        target.mkdir(parents=True, exist_ok=True)
+        for pos, m in enumerate(sel, 1):
+            ncol = 3 if m.family == "torsion" else 2
+            fig, axes = plt.subplots(1, ncol, figsize=(4.2 * ncol, 5.2), squeeze=False)
+            amp = _draw_mode(list(axes[0]), result, m)
+            fig.suptitle(f"{_mode_title(result, m)}\n{m.frequency_hz:.4g} Hz, damping "
+                         f"{m.damping_ratio:.2e}, displacements x{amp:.3g}", fontsize=11)
+            fig.tight_layout()
+            out = target / f"{mode_file_stem(pos, m)}.png"
+            fig.savefig(out, format="png", dpi=90)
+            plt.close(fig)
+            written.append(out)
+        return written
+    nrow = len(sel)
+    fig, axes = plt.subplots(nrow, 3, figsize=(12.6, 5.0 * nrow), squeeze=False)
+    for row, m in zip(axes, sel):
+        if m.family != "torsion":
+            row[2].set_visible(False)
+        _draw_mode(list(row) if m.family == "torsion" else list(row[:2]), result, m)
+        row[0].text(0.02, 0.98, _mode_title(result, m), transform=row[0].transAxes,
+                    va="top", fontsize=10, fontweight="bold")
+    fig.tight_layout()
+    fig.savefig(target, format="png", dpi=80)
+    plt.close(fig)
+    return [target]
