@@ -258,7 +258,7 @@ def _check_same(read, messages, compare):
     assert len(read) == len(messages)
     times = [t for _, _, t, _ in read]
     assert times == sorted(times), "log times must be monotonic"
-    for (topic, tn, t, msg), (etopic, etn, et, emsg) in zip(read, messages):
+    for (topic, tn, t, msg), (etopic, etn, et, emsg) in zip(read, messages, strict=True):
         assert (topic, tn, t) == (etopic, etn, et)
         compare(msg, emsg)
 
