@@ -247,9 +247,6 @@ def test_tapered_blade_converges_to_the_continuum_and_is_not_mirror_symmetric():
     assert abs(exact[0] / forward[0] - 1) > 0.2
 
 
-@pytest.mark.xfail(strict=True, reason="sections.py interpolates the COMPLIANCE (1/EI) "
-                   "linearly between stations, docs/turbine-format.md says the properties "
-                   "(EI) are interpolated linearly: a 2-station taper differs by percents")
 def test_two_station_taper_interpolates_stiffness_linearly():
     """Reference: the same Chebyshev continuum with EI linear between the two stations, as
     docs/turbine-format.md specifies.  Tolerance 1e-3 (N = 32 is within ~2e-3 of the limit,

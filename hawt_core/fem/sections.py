@@ -6,9 +6,11 @@ Ordering: stiffness/compliance act on ``[F1, F2, F3, M1, M2, M3]`` <-> ``[g1, g2
 reference line.
 
 Rigid directions (EA, GA2 or GA3 not given) get zero compliance, i.e. ``gamma_k = 0`` and the
-corresponding section force is a Lagrange multiplier. Along the span, the compliance and mass
-matrices are interpolated linearly between stations and averaged exactly over each element
-(the mixed form integrates the compliance over the element, so its average is what enters).
+corresponding section force is a Lagrange multiplier. Along the span, the section properties
+are interpolated linearly between stations (docs/turbine-format.md); the mixed form integrates
+the compliance over each element, so the element compliance is the Gauss average of the
+inverse of the interpolated stiffness, and the element mass matrix the exact average of the
+interpolated mass matrix.
 """
 from __future__ import annotations
 
@@ -106,6 +108,42 @@ def element_average(stations: np.ndarray, values: np.ndarray, edges: np.ndarray)
     return out.reshape((len(edges) - 1,) + values.shape[1:])
 
 
+def sections_at(t: SectionTable, x: np.ndarray) -> SectionTable:
+    """The section table interpolated linearly (every property, as the file format says) at
+    the span fractions ``x``."""
+    out = {"stations": x}
+    for name in ("mass", "i1", "i2", "i3", "gj", "ei2", "ei3", "ea", "ga2", "ga3", "twist",
+                 "cg_offset", "tension_offset", "stiffness_6x6", "mass_6x6"):
+        a = getattr(t, name)
+        if a is None:
+            out[name] = None
+            continue
+        flat = np.asarray(a, float).reshape(len(t.stations), -1)
+        cols = [np.interp(x, t.stations, flat[:, j]) if np.all(np.isfinite(flat[:, j]))
+                else np.full(len(x), np.inf) for j in range(flat.shape[1])]
+        out[name] = np.stack(cols, -1).reshape((len(x),) + np.shape(a)[1:])
+    return SectionTable(**out)
+
+
+def element_compliance(t: SectionTable, length: float, nodes: np.ndarray,
+                       points: int = 8) -> np.ndarray:
+    """Element averages (N, 6, 6) of the compliance, with the stiffness properties
+    interpolated linearly between stations (Gauss-Legendre, ``points`` per element and per
+    station interval inside the element, so breakpoints are honoured)."""
+    xg, wg = np.polynomial.legendre.leggauss(points)
+    st = t.stations * length
+    out = np.empty((len(nodes) - 1, 6, 6))
+    for e in range(len(nodes) - 1):
+        a, b = nodes[e], nodes[e + 1]
+        cuts = np.concatenate([[a], st[(st > a) & (st < b)], [b]])
+        lo, hi = cuts[:-1, None], cuts[1:, None]
+        x = (0.5 * (hi - lo) * xg[None] + 0.5 * (hi + lo)).ravel()
+        w = (0.5 * (hi - lo) * wg[None]).ravel()
+        comp = station_compliance(sections_at(t, np.clip(x / length, 0.0, 1.0)))
+        out[e] = np.einsum("k,kij->ij", w, comp) / (b - a)
+    return out
+
+
 @dataclass(frozen=True, eq=False)
 class ElementProperties:
     """Per-element data of a meshed beam.
@@ -132,7 +170,7 @@ def mesh_beam(beam: Beam, elements: int | None = None) -> ElementProperties:
         raise ValueError(f"elements: {n} is not allowed; need an integer >= 1")
     nodes = np.linspace(0.0, beam.length, n + 1)
     st = beam.sections.stations * beam.length
-    comp = element_average(st, station_compliance(beam.sections), nodes)
+    comp = element_compliance(beam.sections, beam.length, nodes)
     mass = element_average(st, station_mass(beam.sections), nodes)
     rigid = np.array([np.all(np.abs(comp[:, k, :]) == 0) for k in range(3)])
     return ElementProperties(nodes=nodes, h=np.diff(nodes), compliance=comp, mass=mass, rigid=rigid)
