@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 import multiprocessing
+import os
 import queue
 import signal
 import threading
@@ -25,7 +26,10 @@ from typing import Any, Callable, Dict, List, Optional
 
 import numpy as np
 
-__all__ = ["AnalysisRunner", "Job", "result_to_plain"]
+__all__ = ["AnalysisRunner", "Job", "result_to_plain", "WORKER_NICE"]
+
+#: Niceness added to analysis workers (lower CPU priority than the node's simulation).
+WORKER_NICE = 10
 
 
 # ----------------------------------------------------------------------------- worker side
@@ -109,6 +113,10 @@ def result_to_plain(result) -> Dict[str, Any]:
 def _worker_main(conn, turbine, kwargs, cancel_event) -> None:
     """Entry point of an analysis worker process."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)     # the node decides when we stop
+    try:  # background work: the node's real-time simulation wins any contention for a core
+        os.nice(WORKER_NICE)
+    except OSError:
+        pass
     try:
         from hawt_ros.backend import load_backend
 
@@ -158,6 +166,7 @@ class Job:
         self.message = ""
         self.cached = False
         self.wall_time = 0.0
+        self.last_progress = -1.0
         self._done = threading.Event()
         self._cancel = threading.Event()
         self._lock = threading.Lock()
@@ -177,6 +186,7 @@ class Job:
             self._progress_callbacks.append(fn)
 
     def _progress(self, fraction: float, message: str) -> None:
+        self.last_progress = float(fraction)
         with self._lock:
             cbs = list(self._progress_callbacks)
         for fn in cbs:
@@ -359,7 +369,7 @@ class AnalysisRunner:
         status, message, result = outcome
         if status == "cancelled" and not (job.cancel_requested or self._stopping.is_set()):
             status = "error"
-        if status == "ok":
+        if status == "ok" and job.last_progress < 1.0:
             job._progress(1.0, "done")
         job._finish(status, message, result)
 

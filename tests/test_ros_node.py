@@ -1,0 +1,760 @@
+"""Cross-process tests of the hawt ROS 2 node (hawt_ros/node.py) and the ROS subcommands of
+the ``hawt`` CLI (hawt_ros/cli.py), over real DDS on localhost.
+
+Every test that needs ROS spawns ``hawt-node`` (the venv's console script) in a subprocess with
+its own ROS_DOMAIN_ID (from the pid and a counter), ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST
+and ROS_LOG_DIR in a temporary folder; clients and subscribers live in this (pytest) process
+in an rclpy context on the same domain. Waits poll (never fixed sleeps) and every wait and
+loop is bounded. The real simulation and modal analysis (hawt_core) are used, except where a
+test needs a failure or a controlled duration: then tests/ros_fakes.py stands in (environment
+HAWT_ROS_FAKE, see hawt_ros/backend.py).
+
+Without rclpy/hawt_msgs the ROS tests skip, unless HAWT_REQUIRE_ROS=1 (scripts/test.sh):
+then they fail.
+"""
+from __future__ import annotations
+
+import itertools
+import json
+import math
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+HERE = Path(__file__).resolve().parent
+FAKES = HERE / "ros_fakes.py"
+BIN = Path(sys.executable).parent
+NODE_EXE = BIN / "hawt-node"
+HAWT_EXE = BIN / "hawt"
+
+try:
+    import rclpy
+    from rclpy.executors import MultiThreadedExecutor
+    from rclpy.signals import SignalHandlerOptions
+    from hawt_msgs.msg import BladeDeflection
+    from hawt_msgs.srv import ModalAnalysis
+    from hawt_msgs.action import ModalAnalysis as ModalAnalysisAction
+    from sensor_msgs.msg import JointState
+    from visualization_msgs.msg import Marker, MarkerArray
+    from rosgraph_msgs.msg import Clock
+    _ROS_ERROR = None
+except Exception as exc:  # noqa: BLE001
+    _ROS_ERROR = f"{type(exc).__name__}: {exc}"
+
+
+def _require_ros():
+    if _ROS_ERROR is not None:
+        msg = f"rclpy/hawt_msgs cannot be imported ({_ROS_ERROR})"
+        if os.environ.get("HAWT_REQUIRE_ROS") == "1":
+            pytest.fail(msg + " but HAWT_REQUIRE_ROS=1")
+        pytest.skip(msg)
+    if not NODE_EXE.exists():
+        pytest.fail(f"{NODE_EXE} missing: install hawt into this venv (pip install -e .)")
+
+
+ros = pytest.mark.ros
+_counter = itertools.count()
+TABLE2_N4 = [2.4347, 7.3210, 15.5465, 28.3486, 2.2896, 2.2915, 6.5738, 6.5742,
+             4.7523, 4.9927, 33.5731, 34.1087]
+
+
+def domain_id() -> int:
+    """A ROS domain of this test alone: from the pid and a counter, in 1..101."""
+    return (os.getpid() * 7 + next(_counter) * 13) % 101 + 1
+
+
+def wait_until(cond, timeout: float, step: float = 0.02, what: str = "condition"):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        v = cond()
+        if v:
+            return v
+        time.sleep(step)
+    raise AssertionError(f"timed out after {timeout:g} s waiting for {what}")
+
+
+# ============================================================================ fixtures
+@pytest.fixture(scope="session", autouse=True)
+def _ros_process_env(tmp_path_factory):
+    """This process's rcl logs go to a temporary folder; discovery stays on localhost."""
+    os.environ.setdefault("ROS_LOG_DIR", str(tmp_path_factory.mktemp("roslog")))
+    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    yield
+
+
+class NodeProcess:
+    """``hawt-node`` in a subprocess, stopped (SIGTERM, then SIGKILL) at the end."""
+
+    def __init__(self, tmp_path: Path, params: dict, domain: int, fake: str = "",
+                 env: dict = None):
+        self.domain = domain
+        self.log_path = tmp_path / f"node-{domain}-{next(_counter)}.log"
+        e = dict(os.environ)
+        e.update({"ROS_DOMAIN_ID": str(domain), "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST",
+                  "ROS_LOG_DIR": str(tmp_path / "roslog"), "PYTHONUNBUFFERED": "1"})
+        e.pop("HAWT_ROS_FAKE", None)
+        if fake:
+            e["HAWT_ROS_FAKE"] = str(FAKES)
+            e["HAWT_ROS_FAKE_PARTS"] = fake
+        e.update(env or {})
+        args = [str(NODE_EXE), "--ros-args"]
+        for k, v in params.items():
+            args += ["-p", f"{k}:={v}"]
+        self.args = args
+        self._log = open(self.log_path, "w")
+        self.proc = subprocess.Popen(args, env=e, stdout=self._log, stderr=subprocess.STDOUT,
+                                     cwd=str(tmp_path))
+
+    def log(self) -> str:
+        if not self._log.closed:
+            self._log.flush()
+        return self.log_path.read_text()
+
+    def alive(self) -> bool:
+        return self.proc.poll() is None
+
+    def signal(self, sig) -> None:
+        self.proc.send_signal(sig)
+
+    def wait(self, timeout: float) -> int:
+        return self.proc.wait(timeout)
+
+    def stop(self) -> int:
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+            try:
+                self.proc.wait(15)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait(5)
+        self._log.close()
+        return self.proc.returncode
+
+
+class Collector:
+    """Messages of one subscription with their receive times."""
+
+    def __init__(self):
+        self.items = []          # (monotonic s, wall ns, msg)
+        self.lock = threading.Lock()
+
+    def __call__(self, msg):
+        with self.lock:
+            self.items.append((time.monotonic(), time.time_ns(), msg))
+
+    def __len__(self):
+        with self.lock:
+            return len(self.items)
+
+    def snapshot(self):
+        with self.lock:
+            return list(self.items)
+
+    def msgs(self):
+        return [m for _, _, m in self.snapshot()]
+
+
+class RosClient:
+    """An rclpy context on ``domain`` in this process, spun by a background thread."""
+
+    def __init__(self, domain: int, name: str = "hawt_test_client"):
+        self.ctx = rclpy.Context()
+        rclpy.init(context=self.ctx, domain_id=domain,
+                   signal_handler_options=SignalHandlerOptions.NO)
+        self.node = rclpy.create_node(name, context=self.ctx)
+        self.executor = MultiThreadedExecutor(num_threads=4, context=self.ctx)
+        self.executor.add_node(self.node)
+        self.thread = threading.Thread(target=self._spin, daemon=True)
+        self.thread.start()
+
+    def _spin(self):
+        try:
+            self.executor.spin()
+        except Exception:  # noqa: BLE001 - shutdown
+            pass
+
+    def subscribe(self, cls, topic, depth=1000) -> Collector:
+        col = Collector()
+        self.node.create_subscription(cls, topic, col, depth)
+        return col
+
+    def result(self, future, timeout: float):
+        done = threading.Event()
+        future.add_done_callback(lambda f: done.set())
+        if not done.wait(timeout):
+            raise AssertionError(f"no answer within {timeout} s")
+        return future.result()
+
+    def close(self):
+        self.executor.shutdown(timeout_sec=2.0)
+        self.node.destroy_node()
+        rclpy.try_shutdown(context=self.ctx)
+
+
+@pytest.fixture
+def ros_env():
+    _require_ros()
+    yield
+
+
+@pytest.fixture
+def spawn(tmp_path, ros_env):
+    """spawn(params, fake='', env=None) -> (NodeProcess, RosClient) on a fresh domain."""
+    made = []
+
+    def _spawn(params=None, fake="", env=None):
+        d = domain_id()
+        node = NodeProcess(tmp_path, params or {}, d, fake=fake, env=env)
+        client = RosClient(d)
+        made.append((node, client))
+        return node, client
+
+    yield _spawn
+    for node, client in made:
+        node.stop()
+        client.close()
+
+
+def first_message(node: NodeProcess, col: Collector, timeout: float = 40.0):
+    """Wait for the node to start and for discovery (bounded), with the node's log on failure."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if len(col):
+            return
+        if not node.alive():
+            raise AssertionError(f"hawt-node exited with {node.proc.returncode}:\n{node.log()}")
+        time.sleep(0.02)
+    raise AssertionError(f"no message within {timeout} s; node log:\n{node.log()}")
+
+
+def run_cli(args, domain: int, tmp_path: Path, timeout: float = 60.0, **kw):
+    env = dict(os.environ, ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST",
+               ROS_LOG_DIR=str(tmp_path / "roslog"))
+    return subprocess.run([str(HAWT_EXE), *args], env=env, capture_output=True, text=True,
+                          timeout=timeout, cwd=str(tmp_path), **kw)
+
+
+def stamp_ns(stamp) -> int:
+    return stamp.sec * 1_000_000_000 + stamp.nanosec
+
+
+REAL_TIME = {"publish_rate": 10.0, "real_time_factor": 0.25, "step_deg": 5.0,
+             "perturb": "teeter=0.02"}
+
+
+# ============================================================================ unit tests (no ROS)
+def test_parameter_validation_messages():
+    from hawt_ros.params import ParameterError, parse_perturb, validate_parameter, validate_request
+
+    assert parse_perturb("teeter=0.02,yaw_rate=0.01") == {"teeter": 0.02, "yaw_rate": 0.01}
+    assert parse_perturb("") == {}
+    assert validate_parameter("step_deg", 2) == 2.0
+    for name, value, words in [("step_deg", -1.0, ["step_deg", "-1.0", "> 0"]),
+                               ("elements", "abc", ["elements", "'abc'", "integer"]),
+                               ("elements", 4.5, ["elements", "4.5"]),
+                               ("publish_rate", float("nan"), ["publish_rate", "nan"]),
+                               ("real_time_factor", -2, ["real_time_factor", "-2", ">= 0"]),
+                               ("perturb", "bogus=1", ["perturb", "bogus", "teeter"]),
+                               ("marker_frame", "map", ["marker_frame", "nacelle", "hub"])]:
+        with pytest.raises(ParameterError) as ei:
+            validate_parameter(name, value)
+        for w in words:
+            assert w in str(ei.value), (w, str(ei.value))
+    ok = validate_request(0.0, 0, 0, "", default_elements=4)
+    assert (ok.elements, ok.rotor_speed, ok.steps, ok.method) == (4, None, None, "radau")
+    for kw, field in [({"rotor_speed": -1.0}, "rotor_speed"),
+                      ({"rotor_speed": float("nan")}, "rotor_speed"),
+                      ({"rotor_speed": float("inf")}, "rotor_speed"),
+                      ({"elements": 100000}, "elements"),
+                      ({"steps": 2_000_000}, "steps"), ({"steps": 3}, "steps"),
+                      ({"method": "euler"}, "method")]:
+        with pytest.raises(ParameterError, match=field):
+            validate_request(**kw)
+
+
+def test_rotor_loads_match_rigid_dynamics():
+    """The efforts: with pure hub loads the teeter moment equals what Kane's teeter row sees."""
+    from hawt_core.assembly import TurbineModel
+    from hawt_core.io import load_turbine
+    from hawt_ros.geometry import RotorGeometry
+
+    model = TurbineModel(load_turbine(), elements=2)
+    g = RotorGeometry(model.rigid)
+    named = {"yaw": 0.1, "teeter": 0.03}
+    rng = np.random.default_rng(1)
+    F = rng.normal(size=(2, 3)) * 100
+    M = rng.normal(size=(2, 3)) * 100
+    t = 0.3
+    yaw_m, teeter_m, torque = g.loads(named, t, F, M)
+    q = g.q(named)
+    z = np.zeros(2)
+    # generalized active forces of the loads alone: difference of dynamics with/without loads
+    r1 = model.rigid.dynamics(q, z, z, t, F, M)
+    r0 = model.rigid.dynamics(q, z, z, t, 0 * F, 0 * M)
+    gen = r1 - r0               # [yaw row, teeter row]
+    # teeter row: U2 = omega.h2, so its active force is the moment about h2 through SH
+    assert gen[1] == pytest.approx(teeter_m, rel=1e-9, abs=1e-9)
+    # yaw row: partial angular velocity y1 - (y1.h2) h2, so it is the moment about the yaw
+    # axis minus (y1.s2) times the teeter moment (kane.py)
+    y1s2 = -math.sin(model.rigid.azimuth(t))
+    assert gen[0] == pytest.approx(yaw_m - y1s2 * teeter_m, rel=1e-9, abs=1e-9)
+    pts = g.blade_points(named, t, np.tile(model.beam.props.nodes, (2, 1)), np.zeros((2, 3, 3)),
+                         "hub")
+    tip = model.turbine.hub.radius + model.turbine.blade.length
+    assert np.linalg.norm(pts[0, -1]) == pytest.approx(tip)
+    assert np.allclose(pts[0, -1], -pts[1, -1])
+
+
+# ============================================================================ node tests
+@ros
+def test_publishes_joint_states_blades_markers_at_rate(spawn):
+    node, cli = spawn(REAL_TIME)
+    js = cli.subscribe(JointState, "/joint_states")
+    bd = cli.subscribe(BladeDeflection, "/blade_deflections")
+    mk = cli.subscribe(MarkerArray, "/blade_markers")
+    first_message(node, js)
+    n0 = len(js)
+    t0 = time.monotonic()
+    wait_until(lambda: time.monotonic() - t0 >= 3.0 or not node.alive(), 5.0)
+    items = js.snapshot()[n0:]
+    window = items[-1][0] - items[0][0]
+    rate = (len(items) - 1) / window
+    print(f"\njoint_states: {rate:.2f} Hz over {window:.2f} s (requested 10 Hz)")
+    assert 7.0 <= rate <= 13.0, node.log()
+    msgs = js.msgs()
+    stamps = [stamp_ns(m.header.stamp) for m in msgs]
+    assert all(b > a for a, b in zip(stamps, stamps[1:])), "stamps not strictly increasing"
+    m = msgs[-1]
+    assert list(m.name) == ["yaw", "teeter", "rotor_azimuth"]
+    for arr in (m.position, m.velocity, m.effort):
+        assert len(arr) == 3 and all(math.isfinite(x) for x in arr)
+    assert m.velocity[2] == pytest.approx(6.02)
+    # ROS (wall-clock) stamps when real_time_factor > 0
+    recv_wall = js.snapshot()[-1][1]
+    assert abs(recv_wall - stamps[-1]) < 2e9
+    # one BladeDeflection per blade per publish, with the same stamps as joint_states
+    wait_until(lambda: len(bd) >= 2 * len(msgs) - 4, 3.0, what="blade deflections")
+    blades = bd.msgs()
+    by_stamp = {}
+    for b in blades:
+        by_stamp.setdefault(stamp_ns(b.header.stamp), []).append(b.blade)
+    common = sorted(set(by_stamp) & set(stamps))
+    assert len(common) >= len(stamps) - 3
+    # (the first and last instants may be cut by discovery / the end of the snapshot)
+    assert all(sorted(by_stamp[s]) == [0, 1] for s in common[1:-1])
+    b = blades[-1]
+    assert b.header.frame_id == f"blade_{b.blade}_root"
+    assert len(b.span) == len(b.displacement) == len(b.rotation) == 5   # 4 elements
+    assert b.span[0] == 0 and b.span[-1] == pytest.approx(8.42)
+    assert all(math.isfinite(v.z) for v in b.displacement)
+    # markers: one LINE_STRIP per blade in the nacelle frame, same stamps
+    marr = mk.msgs()[-1]
+    assert len(marr.markers) == 2
+    for k, mm in enumerate(marr.markers):
+        assert mm.type == Marker.LINE_STRIP and mm.header.frame_id == "nacelle"
+        assert len(mm.points) == 5 and mm.id == k
+    assert stamp_ns(marr.markers[0].header.stamp) in set(stamps) | {stamps[-1]}
+
+
+@ros
+def test_fast_mode_sim_time_stamps_and_clock(spawn):
+    node, cli = spawn({"publish_rate": 20.0, "real_time_factor": 0.0, "step_deg": 5.0})
+    js = cli.subscribe(JointState, "/joint_states")
+    clk = cli.subscribe(Clock, "/clock")
+    first_message(node, js)
+    wait_until(lambda: len(js) >= 12, 30.0, what="12 joint states")
+    stamps = np.array([stamp_ns(m.header.stamp) for m in js.msgs()]) / 1e9
+    d = np.diff(stamps)
+    dt = math.radians(5.0) / 6.02
+    print(f"\nsim-time stamps: spacing {d.min():.4f}..{d.max():.4f} s (1/rate = 0.05 s, "
+          f"step {dt:.4f} s); first {stamps[0]:.4f} s")
+    assert stamps[0] < 600.0    # simulation time (from 0; discovery may miss the first ones)
+    assert np.all(d > 0)
+    assert np.all(np.abs(d - 0.05) <= dt + 1e-6)  # publish_rate in simulation time
+    clocks = np.array([stamp_ns(c.clock) for c in clk.msgs()]) / 1e9
+    assert len(clocks) >= 5 and np.all(np.diff(clocks) >= 0)
+    assert clocks.max() >= stamps[:-1].max() - 1e-9
+
+
+@ros
+def test_service_returns_table2_and_cli_json(spawn, tmp_path):
+    """The default request analyses the node's turbine (4 elements, Radau, 400 steps); the
+    publishing cadence is measured meanwhile (the analysis runs in a worker process)."""
+    # The simulation stand-in (1 ms per step) keeps this measurement about the node's
+    # architecture (analysis in a worker process, publishing in the executor) rather than about
+    # how much CPU a crowded test machine leaves to the real simulator; bench/node.py
+    # measures the real one.
+    node, cli = spawn(dict(REAL_TIME, real_time_factor=1.0), fake="simulate",
+                      env={"HAWT_FAKE_STEP_COST": "0.001"})
+    js = cli.subscribe(JointState, "/joint_states")
+    first_message(node, js)
+    client = cli.node.create_client(ModalAnalysis, "/modal_analysis")
+    assert client.wait_for_service(timeout_sec=10.0)
+    i0 = len(js)
+    t0 = time.monotonic()
+    resp = cli.result(client.call_async(ModalAnalysis.Request()), 240.0)
+    t1 = time.monotonic()
+    assert resp.success, resp.message
+    times = [t for t, _, _ in js.snapshot()[i0:] if t0 <= t <= t1]
+    gaps = np.diff([t0] + times + [t1])
+    print(f"\nservice (4 elements, Table 2): {t1 - t0:.2f} s, compute_time "
+          f"{resp.compute_time:.2f} s; publishing during it: {len(times)} messages, largest "
+          f"gap {gaps.max() * 1e3:.0f} ms (period 100 ms)")
+    assert gaps.max() < 0.3, f"largest publishing gap {gaps.max():.3f} s during the analysis"
+    s = resp.settings
+    assert (s.elements, s.steps, s.method) == (4, 400, "radau")
+    assert s.rotor_speed == pytest.approx(6.02)
+    freqs = np.array([m.frequency_per_rev for m in resp.modes])
+    for f in TABLE2_N4:
+        assert np.min(np.abs(freqs - f)) / f < 2e-3, f"Table 2 value {f} not among {freqs}"
+    reals = np.array([abs(m.real_per_rev) for m in resp.modes])
+    assert np.min(np.abs(reals - 0.045299)) < 1e-3          # the teeter pair's real part
+    assert any(len(m.shape.displacement_real) == 2 * 5 for m in resp.modes)
+    # `hawt call modes --json`: the same modes (the node caches the result)
+    out = run_cli(["call", "modes", "--json"], node.domain, tmp_path, timeout=60)
+    assert out.returncode == 0, out.stderr
+    data = json.loads(out.stdout)
+    assert set(data) >= {"modes", "settings"}
+    assert data["settings"]["elements"] == 4
+    keys = {"family", "symmetry", "index", "frequency_per_rev", "real_per_rev", "frequency_hz",
+            "damping_ratio"}
+    assert all(set(m) == keys for m in data["modes"])
+    assert [m["frequency_per_rev"] for m in data["modes"]] == pytest.approx(list(freqs))
+    table = run_cli(["call", "modes"], node.domain, tmp_path, timeout=60)
+    assert table.returncode == 0 and "symmetric flap" in table.stdout
+
+
+@ros
+def test_action_progress_and_cancel(spawn):
+    from action_msgs.msg import GoalStatus
+    from rclpy.action import ActionClient
+
+    node, cli = spawn({"publish_rate": 5.0, "real_time_factor": 0.1})
+    ac = ActionClient(cli.node, ModalAnalysisAction, "/modal_analysis")
+    assert ac.wait_for_server(timeout_sec=40.0), node.log()
+    # 1. a small analysis: progress feedback up to 1, then success
+    fb1 = []
+    goal = ModalAnalysisAction.Goal(elements=2, steps=64, method="radau")
+    h = cli.result(ac.send_goal_async(goal, feedback_callback=lambda m: fb1.append(m.feedback)),
+                   20.0)
+    assert h.accepted
+    res = cli.result(h.get_result_async(), 120.0)
+    assert res.status == GoalStatus.STATUS_SUCCEEDED and res.result.success, res.result.message
+    prog = [f.progress for f in fb1]
+    print(f"\naction feedback: {[(round(f.progress, 2), f.stage) for f in fb1]}")
+    assert len(prog) >= 3 and prog == sorted(prog) and prog[-1] == pytest.approx(1.0)
+    assert res.result.settings.elements == 2 and len(res.result.modes) > 5
+    # 2. a long analysis, cancelled after its first feedback
+    fb2 = []
+    goal = ModalAnalysisAction.Goal(elements=4, steps=4000, method="radau")
+    h = cli.result(ac.send_goal_async(goal, feedback_callback=lambda m: fb2.append(m.feedback)),
+                   20.0)
+    # cancel during the long monodromy stage (modal_analysis checks cancel() only between
+    # stages: the node stops the worker process after a grace period)
+    wait_until(lambda: any("monodromy" in f.stage for f in fb2), 60.0,
+               what="the monodromy stage of the long goal")
+    tc = time.monotonic()
+    cancel = cli.result(h.cancel_goal_async(), 10.0)
+    assert len(cancel.goals_canceling) == 1
+    res = cli.result(h.get_result_async(), 30.0)
+    took = time.monotonic() - tc
+    print(f"cancelled after {len(fb2)} feedback messages; result in {took:.2f} s: "
+          f"{res.result.message!r}")
+    assert res.status == GoalStatus.STATUS_CANCELED
+    assert not res.result.success and len(res.result.modes) == 0
+    assert "cancel" in res.result.message
+    assert took < 10.0
+    # 3. the node still serves (cached: no recomputation)
+    client = cli.node.create_client(ModalAnalysis, "/modal_analysis")
+    assert client.wait_for_service(timeout_sec=10.0)
+    resp = cli.result(client.call_async(ModalAnalysis.Request(elements=2, steps=64)), 60.0)
+    assert resp.success and "cached" in resp.message
+    # 4. an invalid goal: aborted with a reason
+    h = cli.result(ac.send_goal_async(ModalAnalysisAction.Goal(method="euler")), 20.0)
+    res = cli.result(h.get_result_async(), 20.0)
+    assert res.status == GoalStatus.STATUS_ABORTED and "method" in res.result.message
+    assert node.alive()
+
+
+@ros
+def test_concurrent_service_calls_quarter_invalid(spawn):
+    """50 calls from 5 client nodes at once, every 4th invalid: all answered, node alive.
+    (The fake analysis, 0.3 s each, keeps this test about the ROS plumbing.)"""
+    node, cli = spawn({"publish_rate": 10.0, "real_time_factor": 0.25}, fake="modal")
+    js = cli.subscribe(JointState, "/joint_states")
+    first_message(node, js)
+    invalid = [dict(rotor_speed=-1.0), dict(rotor_speed=float("nan")), dict(steps=2_000_000),
+               dict(elements=100000), dict(method="euler"), dict(steps=3)]
+    valid = [dict(elements=2, steps=64), dict(elements=3, steps=64), dict(elements=2, steps=32),
+             dict()]
+    answers = []
+    lock = threading.Lock()
+    clients = [cli.node.create_client(ModalAnalysis, "/modal_analysis") for _ in range(5)]
+    for c in clients:
+        assert c.wait_for_service(timeout_sec=10.0)
+
+    def run(ci):
+        for j in range(10):
+            n = ci * 10 + j
+            bad = n % 4 == 3
+            kw = invalid[n % len(invalid)] if bad else valid[n % len(valid)]
+            t = time.monotonic()
+            r = cli.result(clients[ci].call_async(ModalAnalysis.Request(**kw)), 90.0)
+            with lock:
+                answers.append((bad, kw, r.success, r.message, time.monotonic() - t))
+
+    t0 = time.monotonic()
+    threads = [threading.Thread(target=run, args=(i,)) for i in range(5)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(150)
+    total = time.monotonic() - t0
+    assert len(answers) == 50, f"only {len(answers)} answers"
+    lat = sorted(a[4] for a in answers)
+    print(f"\n50 calls (5 clients, {sum(a[0] for a in answers)} invalid) in {total:.2f} s; "
+          f"latency median {lat[25] * 1e3:.0f} ms, max {lat[-1] * 1e3:.0f} ms")
+    for bad, kw, ok, msg, _ in answers:
+        if bad:
+            assert not ok and "invalid request" in msg and list(kw)[0] in msg, (kw, msg)
+        else:
+            assert ok, (kw, msg)
+    assert node.alive()
+    n = len(js)
+    wait_until(lambda: len(js) > n + 3, 5.0, what="publishing after the calls")
+
+
+@ros
+def test_sigterm_during_recording_leaves_finalized_mcap(spawn, tmp_path):
+    from hawt_ros.mcap_io import BagReader, bag_info
+
+    bag = tmp_path / "run.mcap"
+    node, cli = spawn(dict(REAL_TIME, record=str(bag)))
+    js = cli.subscribe(JointState, "/joint_states")
+    first_message(node, js)
+    wait_until(lambda: len(js) >= 15, 30.0, what="15 joint states")
+    node.signal(signal.SIGTERM)
+    rc = node.wait(20)
+    assert rc == 0, node.log()
+    assert "recording finalized" in node.log()
+    info = bag_info(bag)
+    assert info["finalized"] and not info["truncated"]
+    topics = info["topics"]
+    assert set(topics) == {"/joint_states", "/blade_deflections", "/blade_markers"}
+    n = topics["/joint_states"]["count"]
+    assert n >= 15 and topics["/blade_deflections"]["count"] == 2 * n
+    assert topics["/blade_markers"]["count"] == n
+    assert info["attachments"] == ["turbine.yaml"]
+    # read back: our reader (rclpy), mcap-ros2-support, rosbags
+    recorded = [m for m in BagReader(bag, topics=["/joint_states"], decode="rclpy")]
+    st = [stamp_ns(m.message.header.stamp) for m in recorded]
+    assert st == sorted(st) and [m.log_time for m in recorded] == st
+    received = {stamp_ns(m.header.stamp) for m in js.msgs()}
+    assert received <= set(st) | {max(st) + 1}      # everything published was recorded
+    from mcap_ros2.reader import read_ros2_messages
+
+    count = 0
+    for m in read_ros2_messages(str(bag)):
+        count += 1
+        if m.channel.topic == "/blade_deflections":
+            assert len(m.ros_msg.span) == 5
+    assert count == info["message_count"]
+    from rosbags.highlevel import AnyReader
+
+    with AnyReader([bag]) as reader:
+        rb = 0
+        for conn, _t, raw in reader.messages():
+            msg = reader.deserialize(raw, conn.msgtype)
+            rb += 1
+            if conn.topic == "/joint_states":
+                assert list(msg.name) == ["yaw", "teeter", "rotor_azimuth"]
+    assert rb == info["message_count"]
+
+
+@ros
+def test_sigkill_leaves_readable_mcap(spawn, tmp_path):
+    from hawt_ros.mcap_io import BagReader, bag_info
+
+    bag = tmp_path / "killed.mcap"
+    node, cli = spawn(dict(REAL_TIME, record=str(bag)))
+    js = cli.subscribe(JointState, "/joint_states")
+    first_message(node, js)
+    wait_until(lambda: len(js) >= 35, 40.0, what="35 joint states")
+    kill_time = time.monotonic()
+    node.signal(signal.SIGKILL)
+    node.wait(10)
+    before = [m for t, _, m in js.snapshot() if t < kill_time - 1.6]   # chunks close after 1 s
+    info = bag_info(bag)
+    assert not info["finalized"]
+    msgs = list(BagReader(bag, topics=["/joint_states"], decode="rclpy"))
+    print(f"\nSIGKILL: {len(msgs)} joint states readable of {len(js)} received "
+          f"({len(before)} older than 1.6 s); error: {info['error']}")
+    assert len(msgs) >= len(before) > 0
+    st = {stamp_ns(m.message.header.stamp) for m in msgs}
+    assert {stamp_ns(m.header.stamp) for m in before} <= st
+
+
+@ros
+def test_play_reproduces_topics(ros_env, tmp_path):
+    """A recorded file played back by `hawt play` reaches a subscriber with its content and
+    its original timing."""
+    from hawt_ros.mcap_io import BagWriter
+    from std_msgs.msg import Header
+    from builtin_interfaces.msg import Time
+
+    bag = tmp_path / "play.mcap"
+    t0 = 1_700_000_000_000_000_000
+    with BagWriter(bag) as w:
+        for i in range(20):
+            ns = t0 + i * 50_000_000
+            stamp = Time(sec=ns // 10**9, nanosec=ns % 10**9)
+            w.write("/joint_states", JointState(header=Header(stamp=stamp),
+                                                name=["yaw", "teeter", "rotor_azimuth"],
+                                                position=[0.1 * i, 0.0, 1.0],
+                                                velocity=[0.0, 0.0, 6.02], effort=[]),
+                    log_time=ns)
+            for k in range(2):
+                w.write("/blade_deflections", BladeDeflection(header=Header(stamp=stamp),
+                                                              blade=k, span=[0.0, 8.42]),
+                        log_time=ns)
+    d = domain_id()
+    cli = RosClient(d)
+    try:
+        js = cli.subscribe(JointState, "/joint_states")
+        bd = cli.subscribe(BladeDeflection, "/blade_deflections")
+        out = run_cli(["play", str(bag), "--wait-for-subscribers", "15"], d, tmp_path, timeout=60)
+        assert out.returncode == 0, out.stderr
+        wait_until(lambda: len(js) >= 20 and len(bd) >= 40, 5.0, what="played messages")
+    finally:
+        cli.close()
+    items = js.snapshot()
+    assert [m.position[0] for _, _, m in items] == pytest.approx([0.1 * i for i in range(20)])
+    gaps = np.diff([t for t, _, _ in items])
+    print(f"\nplay: 20 joint states, mean gap {gaps.mean() * 1e3:.1f} ms (recorded 50 ms), "
+          f"total {(items[-1][0] - items[0][0]):.3f} s (recorded 0.95 s)")
+    assert items[-1][0] - items[0][0] == pytest.approx(0.95, abs=0.25)
+    assert sorted(m.blade for m in bd.msgs()) == [0] * 20 + [1] * 20
+
+
+@ros
+def test_record_info_echo_cli_from_live_topics(spawn, tmp_path):
+    from rosbags.highlevel import AnyReader
+
+    node, cli = spawn(REAL_TIME)
+    js = cli.subscribe(JointState, "/joint_states")
+    first_message(node, js)
+    out = run_cli(["echo", "/joint_states", "--count", "2", "--json"], node.domain, tmp_path)
+    assert out.returncode == 0, out.stderr
+    lines = [json.loads(x) for x in out.stdout.splitlines()]
+    assert len(lines) == 2 and lines[0]["name"] == ["yaw", "teeter", "rotor_azimuth"]
+    bag = tmp_path / "live.mcap"
+    out = run_cli(["record", str(bag), "--topics", "/joint_states", "/blade_deflections",
+                   "--duration", "3"], node.domain, tmp_path)
+    assert out.returncode == 0, out.stderr
+    info = run_cli(["info", str(bag)], node.domain, tmp_path)
+    assert info.returncode == 0 and "finalized" in info.stdout
+    assert "/joint_states" in info.stdout and "sensor_msgs/msg/JointState" in info.stdout
+    data = json.loads(run_cli(["info", str(bag), "--json"], node.domain, tmp_path).stdout)
+    n = data["topics"]["/joint_states"]["count"]
+    print(f"\nhawt record 3 s: {n} joint states, "
+          f"{data['topics']['/blade_deflections']['count']} blade deflections")
+    assert n >= 10 and data["topics"]["/blade_deflections"]["count"] >= 2 * n - 4
+    with AnyReader([bag]) as reader:
+        assert sum(1 for c, _t, raw in reader.messages()
+                   if reader.deserialize(raw, c.msgtype) is not None) == data["message_count"]
+
+
+@ros
+def test_bad_parameters_exit_with_clear_errors(ros_env, tmp_path):
+    cases = [({"step_deg": -1.0}, ["step_deg", "-1.0", "not allowed", "> 0"]),
+             ({"elements": "abc"}, ["elements", "'abc'", "integer"]),
+             ({"perturb": "spin=1"}, ["perturb", "spin", "teeter"]),
+             ({"turbine": str(tmp_path / "missing.yaml")}, ["turbine", "missing.yaml"])]
+    procs = [(NodeProcess(tmp_path, p, domain_id()), words) for p, words in cases]
+    for node, words in procs:
+        try:
+            rc = node.wait(60)
+        finally:
+            node.stop()
+        text = node.log()
+        assert rc == 2, text
+        for w in words:
+            assert w in text, (w, text)
+
+
+@ros
+def test_runtime_parameter_changes(spawn):
+    from rcl_interfaces.msg import Parameter as ParamMsg, ParameterType, ParameterValue
+    from rcl_interfaces.srv import SetParameters
+
+    node, cli = spawn(REAL_TIME)
+    js = cli.subscribe(JointState, "/joint_states")
+    first_message(node, js)
+    client = cli.node.create_client(SetParameters, "/hawt/set_parameters")
+    assert client.wait_for_service(timeout_sec=10.0)
+
+    def set_param(name, value):
+        if isinstance(value, str):
+            v = ParameterValue(type=ParameterType.PARAMETER_STRING, string_value=value)
+        elif isinstance(value, int):
+            v = ParameterValue(type=ParameterType.PARAMETER_INTEGER, integer_value=value)
+        else:
+            v = ParameterValue(type=ParameterType.PARAMETER_DOUBLE, double_value=value)
+        req = SetParameters.Request(parameters=[ParamMsg(name=name, value=v)])
+        return cli.result(client.call_async(req), 10.0).results[0]
+
+    r = set_param("elements", 3)
+    assert not r.successful and "restart" in r.reason and "elements" in r.reason
+    r = set_param("turbine", "/tmp/other.yaml")
+    assert not r.successful and "restart" in r.reason
+    r = set_param("real_time_factor", 0.0)
+    assert not r.successful and "restart" in r.reason
+    r = set_param("publish_rate", -5.0)
+    assert not r.successful and "publish_rate" in r.reason and "-5.0" in r.reason
+    r = set_param("publish_rate", 4.0)
+    assert r.successful, r.reason
+    n0 = len(js)
+    wait_until(lambda: len(js) >= n0 + 2, 5.0)
+    items = js.snapshot()[n0 + 1:]
+    t0 = time.monotonic()
+    wait_until(lambda: time.monotonic() - t0 > 2.5, 4.0)
+    items = js.snapshot()[n0 + 1:]
+    rate = (len(items) - 1) / (items[-1][0] - items[0][0])
+    print(f"\nafter publish_rate:=4.0: {rate:.2f} Hz")
+    assert 3.0 <= rate <= 5.0
+    assert node.alive()
+
+
+@ros
+@pytest.mark.parametrize("failure,logged", [("HAWT_FAKE_NAN_AT", "non-finite"),
+                                            ("HAWT_FAKE_FAIL_AT", "Newton did not converge")])
+def test_simulation_error_keeps_node_and_services_alive(spawn, failure, logged):
+    """A failing simulator (NaN state, or SimulationError): the node logs it, stops publishing
+    (never NaN), keeps serving; SIGINT then exits cleanly with status 0."""
+    node, cli = spawn({"publish_rate": 20.0, "real_time_factor": 1.0},
+                      fake="simulate,modal", env={failure: "6.0"})
+    js = cli.subscribe(JointState, "/joint_states")
+    first_message(node, js)
+    wait_until(lambda: "simulation stopped" in node.log(), 30.0, what="the failure in the log")
+    n = len(js)
+    t0 = time.monotonic()
+    wait_until(lambda: time.monotonic() - t0 > 0.5, 1.0)
+    assert len(js) == n, "still publishing after the failure"
+    for m in js.msgs():
+        assert all(math.isfinite(x) for x in [*m.position, *m.velocity, *m.effort])
+    assert max(stamp_ns(m.header.stamp) for m in js.msgs()) > 0
+    assert logged in node.log()
+    client = cli.node.create_client(ModalAnalysis, "/modal_analysis")
+    assert client.wait_for_service(timeout_sec=10.0)
+    resp = cli.result(client.call_async(ModalAnalysis.Request()), 60.0)
+    assert resp.success, resp.message
+    assert node.alive()
+    node.signal(signal.SIGINT)
+    assert node.wait(20) == 0, node.log()
