@@ -232,6 +232,97 @@ def _register_simulate():
 _register_simulate()
 
 
+# ---------------------------------------------------------------------------- campbell
+def _speeds(text: str):
+    """START:STOP:COUNT -> COUNT evenly spaced rotor speeds [rad/s]; errors name the field."""
+    parts = text.split(":")
+    if len(parts) != 3:
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not allowed; need START:STOP:COUNT [rad/s], e.g. 3:9:30")
+    vals = []
+    for name, part in zip(("START", "STOP"), parts[:2]):
+        try:
+            v = float(part)
+        except ValueError:
+            v = float("nan")
+        if not math.isfinite(v):
+            raise argparse.ArgumentTypeError(f"{name} {part!r} is not allowed; need a finite "
+                                             "number [rad/s]")
+        vals.append(v)
+    start, stop = vals
+    try:
+        count = int(parts[2])
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"COUNT {parts[2]!r} is not allowed; need an "
+                                         "integer >= 2")
+    if count < 2:
+        raise argparse.ArgumentTypeError(f"COUNT {parts[2]!r} is not allowed; need an "
+                                         "integer >= 2")
+    if start <= 0:
+        raise argparse.ArgumentTypeError(f"START {parts[0]!r} is not allowed; need a number "
+                                         "> 0 [rad/s]")
+    if stop < start:
+        raise argparse.ArgumentTypeError(f"STOP {parts[1]!r} is not allowed; need STOP >= "
+                                         f"START ({parts[0]})")
+    return [start + (stop - start) * i / (count - 1) for i in range(count)]
+
+
+@command("campbell", help="Campbell diagram: Floquet modes over a range of rotor speeds",
+         description="Floquet modal analysis (as `hawt modes`) at COUNT rotor speeds from START "
+                     "to STOP rad/s, run in parallel worker processes, modes tracked from speed "
+                     "to speed by MAC (Hungarian assignment). Prints the frequency table; "
+                     "--plot writes the diagram (Hz vs rpm with 1P..nP rays, damping), --csv "
+                     "the data.")
+def cmd_campbell(args) -> int:
+    import concurrent.futures as cf
+    import os
+    from .campbell import campbell
+    turbine = _load(args.turbine)
+    status = _StatusLine(True)
+    workers = args.workers or os.cpu_count() or 1
+    with cf.ProcessPoolExecutor(max_workers=workers) as pool:
+        try:
+            result = campbell(turbine, args.speeds, elements=args.elements, steps=args.steps,
+                              method=args.method, executor=pool, progress=status)
+        finally:
+            status.close()
+    result.settings["workers"] = workers
+    print(result.table())
+    if args.csv:
+        result.to_csv(args.csv)
+        print(f"wrote {args.csv}")
+    if args.plot:
+        result.plot(args.plot)
+        print(f"wrote {args.plot}")
+    return 0
+
+
+@cmd_campbell.arguments
+def _campbell_args(p):
+    # let "--speeds -1:9:3" reach _speeds (and its one-line error naming START) instead of
+    # argparse taking "-1:9:3" for an option
+    import re
+    p._negative_number_matcher = re.compile(r"^-\d+$|^-\d*\.\d+$|^-[\d.eE+-]*:")
+    p.add_argument("turbine", nargs="?", default=None, metavar="TURBINE",
+                   help="turbine YAML file (default: the paper's Table 1 turbine)")
+    p.add_argument("--speeds", type=_speeds, required=True, metavar="START:STOP:COUNT",
+                   help="rotor speeds [rad/s]: COUNT (>= 2) evenly spaced from START (> 0) to "
+                        "STOP")
+    p.add_argument("--elements", "-n", type=_positive_int, default=None, metavar="N",
+                   help="finite elements per blade (default: the turbine file's)")
+    p.add_argument("--steps", type=_steps, default=None, metavar="K",
+                   help="time steps per rotor period (default: 400 radau, 1000 paper)")
+    p.add_argument("--method", choices=("radau", "paper"), default="radau",
+                   help="monodromy marching: Radau IIA (default) or the paper's central "
+                        "differencing")
+    p.add_argument("--workers", type=_positive_int, default=None, metavar="W",
+                   help="worker processes (default: one per CPU)")
+    p.add_argument("--plot", metavar="FILE.png", default=None,
+                   help="write the Campbell diagram to this PNG file")
+    p.add_argument("--csv", metavar="FILE", default=None,
+                   help="write speed, track, frequency, real part and damping rows to FILE")
+
+
 # ---------------------------------------------------------------------------- main
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="hawt", description="Structural dynamics and Floquet stability of "

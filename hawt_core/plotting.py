@@ -359,3 +359,55 @@ def plot_turbine_modes(result, path_or_dir, modes=None) -> list:
     fig.savefig(target, format="png", dpi=80)
     plt.close(fig)
     return [target]
+
+
+# ============================================================================ Campbell diagram
+def plot_campbell(result, path, max_hz=None) -> Path:
+    """Campbell diagram of a CampbellResult: frequency [Hz] of every track against the rotor
+    speed [rpm] with the 1P..nP excitation rays, and the damping ratios below. PNG."""
+    plt = _pyplot()
+    rpm = np.asarray(result.rpm, float)
+    tracks = list(result.tracks)
+    fmax = max([np.nanmax(t.frequency_hz) for t in tracks if np.any(t.present())] or [1.0])
+    top = float(max_hz) if max_hz else 1.05 * fmax
+    fig, (ax, axd) = plt.subplots(2, 1, figsize=(9, 8.5), sharex=True,
+                                  gridspec_kw={"height_ratios": [3, 1.3]})
+    rev_hz = rpm[-1] / 60.0 if len(rpm) else 1.0
+    nmax = max(1, int(math.ceil(top / max(rev_hz, 1e-12))))
+    x = np.array([0.0, rpm.max() * 1.02 if len(rpm) else 1.0])
+    for n in range(1, nmax + 1):
+        ax.plot(x, n * x / 60.0, color="0.8", lw=0.8, zorder=0)
+        xe = min(x[1], top * 60.0 / n)
+        ax.text(xe, n * xe / 60.0, f" {n}P", color="0.5", fontsize=7, va="bottom",
+                ha="right" if xe < x[1] else "left")
+    styles = {"symmetric": "-", "collective": "-", "antisymmetric": "--", "cyclic": "--",
+              "differential": "-."}
+    markers = {"flap": "o", "lag": "s", "torsion": "^", "teeter": "D", "yaw": "v",
+               "axial": "x", "shear2": "+", "shear3": "+"}
+    for i, t in enumerate(tracks):
+        ok = t.present()
+        if not ok.any() or np.nanmax(t.frequency_hz) > top * 1.001 and np.nanmin(t.frequency_hz) > top:
+            continue
+        col = f"C{i % 10}"
+        ls = styles.get(t.symmetry or "", "-")
+        mk = markers.get(t.family, ".")
+        ax.plot(rpm, t.frequency_hz, ls=ls, marker=mk, ms=3.5, color=col, label=t.label)
+        axd.plot(rpm, t.damping_ratio, ls=ls, marker=mk, ms=3.5, color=col)
+    ax.set_ylim(0.0, top)
+    ax.set_xlim(x[0], x[1])
+    ax.set_ylabel("frequency [Hz]")
+    ax.set_title(f"Campbell diagram: {result.settings.get('turbine', '')}\n"
+                 f"{result.settings.get('elements')} elements, "
+                 f"{result.settings.get('method')} {result.settings.get('steps')} steps/period",
+                 fontsize=10)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7, ncol=2, loc="upper left")
+    axd.axhline(0.0, color="0.5", lw=0.8)
+    axd.set_xlabel("rotor speed [rpm]")
+    axd.set_ylabel("damping ratio")
+    axd.grid(True, alpha=0.3)
+    fig.tight_layout()
+    path = Path(path)
+    fig.savefig(path, format="png", dpi=100)
+    plt.close(fig)
+    return path

@@ -1,0 +1,337 @@
+"""Campbell diagrams: Floquet modal analysis over a range of rotor speeds, modes tracked.
+
+``campbell(turbine, speeds, ...)`` runs :func:`hawt_core.modal.modal_analysis` once per rotor
+speed through any :class:`concurrent.futures.Executor` (default: a ``ProcessPoolExecutor`` with
+one worker per CPU; a thread pool, a Dask ``Client.get_executor()`` or a Ray executor work the
+same, see docs/campbell.md).  The work unit is the top-level, picklable
+:func:`campbell_point`, which takes plain data (a dict holding the Turbine dataclass) and
+returns plain data (per-mode dicts and the eigenvectors needed for tracking).
+
+Tracking: at every speed the modes are assigned to the tracks of the previous speeds by the
+modal assurance criterion (MAC) of their Floquet eigenvectors x(0) on the displacement-like
+rows (rigid yaw and teeter angles times the rotor radius, blade u, blade theta times the blade
+length: tip metres), solved as a linear assignment (Hungarian method,
+``scipy.optimize.linear_sum_assignment``) on ``1 - MAC`` plus a small frequency-change term
+that only breaks near-ties.  Each track keeps the label its mode had at the first speed where
+it appeared; a mode no track claims starts a new track.
+"""
+from __future__ import annotations
+
+import concurrent.futures as cf
+import csv
+import math
+import os
+import time
+from dataclasses import dataclass, field
+from typing import Callable, Optional, Sequence
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+
+from .model import Turbine
+
+#: Weight of the relative frequency change in the assignment cost (tie-breaker only).
+FREQUENCY_WEIGHT = 0.05
+#: Below this MAC, an assignment is refused (the mode starts a new track).
+MIN_MAC = 0.2
+
+CSV_COLUMNS = ("speed_rad_s", "speed_rpm", "track", "family", "symmetry", "index",
+               "frequency_per_rev", "frequency_hz", "real_per_rev", "damping_ratio", "mac")
+
+
+# ---------------------------------------------------------------------------- BLAS threads
+_BLAS_SYMBOLS = ("scipy_openblas_set_num_threads64_", "scipy_openblas_set_num_threads",
+                 "openblas_set_num_threads64_", "openblas_set_num_threads",
+                 "MKL_Set_Num_Threads", "bli_thread_set_num_threads")
+
+
+def limit_blas_threads(n: int = 1) -> int:
+    """Set the thread count of every OpenBLAS/MKL/BLIS loaded in this process (Linux; uses the
+    libraries' own set-threads entry points).  Returns how many libraries were set; 0 where
+    this is not possible.  Worker processes call it so that W workers on W cores do not each
+    start a BLAS thread per core (oversubscription slows the monodromy solves severalfold)."""
+    import ctypes
+    done = 0
+    try:
+        with open("/proc/self/maps") as f:
+            paths = {line.split()[-1] for line in f if "/" in line}
+    except OSError:
+        return 0
+    for path in paths:
+        name = os.path.basename(path).lower()
+        if not any(s in name for s in ("openblas", "mkl_rt", "blis")):
+            continue
+        try:
+            lib = ctypes.CDLL(path)
+        except OSError:
+            continue
+        for sym in _BLAS_SYMBOLS:
+            fn = getattr(lib, sym, None)
+            if fn is not None:
+                try:
+                    fn(int(n))
+                    done += 1
+                except Exception:  # pragma: no cover - exotic builds
+                    pass
+                break
+    return done
+
+
+_LIMITED_PID = None
+
+
+# ---------------------------------------------------------------------------- work unit
+def campbell_point(task: dict) -> dict:
+    """One rotor speed: modal analysis and the plain-data summary used by :func:`campbell`.
+
+    ``task``: ``{"turbine": Turbine, "speed": float [rad/s], "elements", "steps", "method",
+    "parent_pid": int}``.  Top-level and picklable; in a process other than ``parent_pid`` the
+    BLAS is limited to ``task.get("blas_threads", 1)`` thread(s) first.
+
+    Returns ``{"speed", "modes": [mode dict + "label", ...], "vectors": complex (m, n_modes)
+    (display rows, tip metres), "settings", "unresolved", "compute_time", "pid"}``.
+    """
+    global _LIMITED_PID
+    from .modal import _display_rows, modal_analysis
+    pid = os.getpid()
+    if task.get("parent_pid") not in (None, pid) and _LIMITED_PID != pid:
+        limit_blas_threads(int(task.get("blas_threads", 1)))
+        _LIMITED_PID = pid
+    res = modal_analysis(task["turbine"], elements=task.get("elements"),
+                         rotor_speed=float(task["speed"]), steps=task.get("steps"),
+                         method=task.get("method"))
+    rows, wts = _display_rows(res.model)
+    X = res.floquet.eigenvectors
+    cols = [m.column for m in res.modes]
+    vectors = X[rows][:, cols] * wts[:, None] if cols else np.zeros((len(rows), 0), complex)
+    from .plotting import mode_label
+    modes = []
+    for m in res.modes:
+        d = m.to_dict()
+        d["label"] = mode_label(m)
+        modes.append(d)
+    return {"speed": float(res.model.rotor_speed), "modes": modes,
+            "vectors": np.ascontiguousarray(vectors), "settings": dict(res.settings),
+            "unresolved": int(res.unresolved), "compute_time": float(res.compute_time),
+            "pid": pid}
+
+
+# ---------------------------------------------------------------------------- result
+@dataclass
+class Track:
+    """One mode followed over the speeds; arrays have one entry per speed (NaN where the mode
+    was not found, e.g. above the temporal resolution at that speed)."""
+
+    label: str
+    family: str
+    symmetry: Optional[str]
+    index: int
+    frequency_per_rev: np.ndarray
+    frequency_hz: np.ndarray
+    real_per_rev: np.ndarray
+    damping_ratio: np.ndarray
+    mac: np.ndarray = field(repr=False)
+
+    def present(self) -> np.ndarray:
+        return np.isfinite(self.frequency_hz)
+
+
+@dataclass
+class CampbellResult:
+    """Result of :func:`campbell`: ``speeds`` [rad/s] ascending, ``tracks`` (Track list in the
+    order of their first-speed frequencies), ``points`` (the raw per-speed outputs)."""
+
+    speeds: np.ndarray
+    tracks: list
+    points: list = field(repr=False)
+    settings: dict = field(default_factory=dict)
+    compute_time: float = 0.0
+
+    @property
+    def rpm(self) -> np.ndarray:
+        return self.speeds * 60.0 / (2.0 * np.pi)
+
+    def track(self, label: str) -> Track:
+        for t in self.tracks:
+            if t.label == label:
+                return t
+        raise KeyError(f"campbell: no track labelled {label!r}")
+
+    def rows(self) -> list:
+        """One dict per (speed, track) where the track has a mode, in speed order."""
+        out = []
+        for i, (w, n) in enumerate(zip(self.speeds, self.rpm)):
+            for t in self.tracks:
+                if not np.isfinite(t.frequency_hz[i]):
+                    continue
+                out.append({"speed_rad_s": float(w), "speed_rpm": float(n), "track": t.label,
+                            "family": t.family, "symmetry": t.symmetry or "",
+                            "index": t.index,
+                            "frequency_per_rev": float(t.frequency_per_rev[i]),
+                            "frequency_hz": float(t.frequency_hz[i]),
+                            "real_per_rev": float(t.real_per_rev[i]),
+                            "damping_ratio": float(t.damping_ratio[i]),
+                            "mac": float(t.mac[i])})
+        return out
+
+    def to_csv(self, path) -> str:
+        """Write the CSV (header + one row per speed and track); returns the path."""
+        with open(path, "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=list(CSV_COLUMNS))
+            w.writeheader()
+            for r in self.rows():
+                w.writerow({k: (f"{v:.12g}" if isinstance(v, float) else v) for k, v in r.items()})
+        return str(path)
+
+    def plot(self, path, max_hz: Optional[float] = None):
+        """Campbell diagram (frequency [Hz] vs rotor speed [rpm], 1P..nP rays) and the damping
+        ratios, to a PNG file."""
+        from .plotting import plot_campbell
+        return plot_campbell(self, path, max_hz=max_hz)
+
+    def table(self) -> str:
+        lines = [f"Campbell diagram of '{self.settings.get('turbine', '')}': "
+                 f"{len(self.speeds)} speeds, {self.settings.get('elements')} elements, "
+                 f"{self.settings.get('method')} {self.settings.get('steps')} steps/period; "
+                 "frequencies [Hz]"]
+        head = f"{'rad/s':>8}{'rpm':>8} " + "".join(f"{t.label[:14]:>15}" for t in self.tracks)
+        lines.append(head)
+        for i, (w, n) in enumerate(zip(self.speeds, self.rpm)):
+            vals = "".join(f"{t.frequency_hz[i]:>15.4f}" if np.isfinite(t.frequency_hz[i])
+                           else f"{'-':>15}" for t in self.tracks)
+            lines.append(f"{w:>8.3f}{n:>8.2f} {vals}")
+        lines.append(f"computed in {self.compute_time:.2f} s")
+        return "\n".join(lines)
+
+
+# ---------------------------------------------------------------------------- tracking
+def _mac_matrix(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """MAC between the columns of A (m, p) and B (m, q) -> (p, q)."""
+    num = np.abs(np.conj(A).T @ B) ** 2
+    den = np.outer((np.abs(A) ** 2).sum(0), (np.abs(B) ** 2).sum(0))
+    return num / np.where(den > 0, den, 1.0)
+
+
+def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
+                frequency_weight: float = FREQUENCY_WEIGHT) -> list:
+    """Tracks from per-speed outputs of :func:`campbell_point` (sorted by speed)."""
+    S = len(points)
+    tracks: list = []          # dicts: label info, per-speed values, last vector and frequency
+
+    def new_track(i, m, v):
+        t = {"label": m["label"], "family": m["family"], "symmetry": m["symmetry"],
+             "index": m["index"], "vals": np.full((S, 5), np.nan), "vec": v,
+             "f": m["frequency_hz"]}
+        tracks.append(t)
+        return t
+
+    def put(t, i, m, v, mac):
+        t["vals"][i] = (m["frequency_per_rev"], m["frequency_hz"], m["real_per_rev"],
+                        m["damping_ratio"], mac)
+        t["vec"], t["f"] = v, m["frequency_hz"]
+
+    for i, p in enumerate(points):
+        modes, V = p["modes"], p["vectors"]
+        if not tracks:
+            for j, m in enumerate(modes):
+                put(new_track(i, m, V[:, j]), i, m, V[:, j], 1.0)
+            continue
+        if V.shape[0] != tracks[0]["vec"].shape[0]:
+            raise ValueError("campbell: the eigenvectors of different speeds have different "
+                             "sizes (same turbine and elements needed)")
+        Tv = np.stack([t["vec"] for t in tracks], 1)
+        mac = _mac_matrix(Tv, V)                                   # (tracks, modes)
+        ft = np.array([t["f"] for t in tracks])
+        fm = np.array([m["frequency_hz"] for m in modes])
+        rel = np.abs(ft[:, None] - fm[None, :]) / np.maximum(
+            np.maximum(np.abs(ft[:, None]), np.abs(fm[None, :])), 1e-3)
+        cost = (1.0 - mac) + frequency_weight * np.minimum(rel, 1.0)
+        ti, mj = linear_sum_assignment(cost)
+        taken = set()
+        for a, b in zip(ti, mj):
+            if mac[a, b] >= min_mac:
+                put(tracks[a], i, modes[b], V[:, b], float(mac[a, b]))
+                taken.add(b)
+        for j, m in enumerate(modes):
+            if j not in taken:
+                put(new_track(i, m, V[:, j]), i, m, V[:, j], float("nan"))
+    # unique labels (a label reused by a track born later gets a suffix)
+    seen = {}
+    out = []
+    for t in tracks:
+        lab = t["label"]
+        seen[lab] = seen.get(lab, 0) + 1
+        if seen[lab] > 1:
+            lab = f"{lab} #{seen[lab]}"
+        v = t["vals"]
+        out.append(Track(label=lab, family=t["family"], symmetry=t["symmetry"],
+                         index=t["index"], frequency_per_rev=v[:, 0], frequency_hz=v[:, 1],
+                         real_per_rev=v[:, 2], damping_ratio=v[:, 3], mac=v[:, 4]))
+    return out
+
+
+# ---------------------------------------------------------------------------- driver
+def check_speeds(speeds) -> np.ndarray:
+    """Validated rotor speeds [rad/s] (finite, > 0, at least one) as a float array."""
+    try:
+        arr = np.atleast_1d(np.asarray(speeds, dtype=float))
+    except (TypeError, ValueError):
+        raise ValueError(f"speeds: {speeds!r} is not allowed; need numbers > 0 [rad/s]")
+    if arr.ndim != 1 or arr.size < 1:
+        raise ValueError(f"speeds: {speeds!r} is not allowed; need at least one speed [rad/s]")
+    bad = [float(s) for s in arr if not (math.isfinite(s) and s > 0)]
+    if bad:
+        raise ValueError(f"speeds: {bad[0]!r} is not allowed; need finite numbers > 0 [rad/s]")
+    return arr
+
+
+def campbell(turbine: Turbine, speeds, elements: Optional[int] = None,
+             steps: Optional[int] = None, method: Optional[str] = None,
+             executor: Optional[cf.Executor] = None,
+             progress: Optional[Callable[[float, str], None]] = None) -> CampbellResult:
+    """Floquet modal analysis of ``turbine`` at every rotor speed of ``speeds`` [rad/s]
+    (run as :func:`campbell_point` tasks on ``executor``; default a ProcessPoolExecutor with
+    ``os.cpu_count()`` workers, shut down afterwards; a given executor is left running), modes
+    tracked by MAC + Hungarian assignment.  ``progress(fraction, message)`` is called as
+    speeds complete.  The speeds are analysed and reported in ascending order."""
+    from .modal import validate_request
+    arr = np.sort(check_speeds(speeds))
+    validate_request(elements, None, steps, method)
+    t0 = time.perf_counter()
+    own = executor is None
+    if own:
+        executor = cf.ProcessPoolExecutor(max_workers=os.cpu_count() or 1)
+    tasks = [{"turbine": turbine, "speed": float(w), "elements": elements, "steps": steps,
+              "method": method, "parent_pid": os.getpid()} for w in arr]
+    results: list = [None] * len(tasks)
+    try:
+        if progress is not None:
+            progress(0.0, f"0/{len(tasks)} speeds")
+        futures = {executor.submit(campbell_point, t): i for i, t in enumerate(tasks)}
+        if all(isinstance(f, cf.Future) for f in futures):
+            done_iter = cf.as_completed(futures)
+        else:  # foreign futures: wait in order
+            done_iter = iter(futures)
+        for n, f in enumerate(done_iter, 1):
+            i = futures[f]
+            results[i] = f.result()
+            if progress is not None:
+                progress(n / len(tasks), f"{n}/{len(tasks)} speeds "
+                                         f"({arr[i]:.4g} rad/s done)")
+    except BaseException:
+        for f in futures if "futures" in locals() else ():
+            try:
+                f.cancel()
+            except Exception:
+                pass
+        raise
+    finally:
+        if own:
+            executor.shutdown(wait=True, cancel_futures=True)
+    tracks = track_modes(results)
+    s0 = results[0]["settings"]
+    settings = {"turbine": turbine.name, "elements": s0["elements"], "method": s0["method"],
+                "steps": s0["steps"], "fast": s0["fast"], "speeds": arr.tolist(),
+                "workers": getattr(executor, "_max_workers", None)}
+    return CampbellResult(speeds=arr, tracks=tracks, points=results, settings=settings,
+                          compute_time=time.perf_counter() - t0)

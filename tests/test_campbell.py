@@ -1,0 +1,254 @@
+"""Campbell diagrams (hawt_core/campbell.py), the turbine mode pictures and Campbell plot
+(hawt_core/plotting.py) and the `hawt campbell` CLI.
+
+Every test states its reference and tolerance.  The heavy fixtures (three direct modal
+analyses and two 3-speed Campbell sweeps at N = 2 elements, 128 steps per period) are shared
+by the module; the whole file runs in well under a minute on two cores.
+"""
+from __future__ import annotations
+
+import concurrent.futures as cf
+import csv
+
+import numpy as np
+import pytest
+
+from hawt_core.blade_modes import blade_modes
+from hawt_core.campbell import (CSV_COLUMNS, CampbellResult, campbell, campbell_point,
+                                check_speeds, track_modes)
+from hawt_core.cli import main
+from hawt_core.io import load_turbine
+from hawt_core.modal import modal_analysis
+from hawt_core.plotting import mode_file_stem, plot_turbine_modes, table2_modes
+
+ELEMENTS = 2
+STEPS = 128
+SPEEDS = (5.0, 6.0, 7.0)
+PNG = b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.fixture(scope="module")
+def turbine():
+    return load_turbine(None)
+
+
+@pytest.fixture(scope="module")
+def direct(turbine):
+    return {w: modal_analysis(turbine, elements=ELEMENTS, rotor_speed=w, steps=STEPS)
+            for w in SPEEDS}
+
+
+@pytest.fixture(scope="module")
+def threaded(turbine):
+    with cf.ThreadPoolExecutor(max_workers=2) as pool:
+        return campbell(turbine, SPEEDS, elements=ELEMENTS, steps=STEPS, executor=pool)
+
+
+@pytest.fixture(scope="module")
+def processes(turbine):
+    calls = []
+    res = campbell(turbine, list(reversed(SPEEDS)), elements=ELEMENTS, steps=STEPS,
+                   progress=lambda f, m: calls.append((f, m)))
+    res.progress_calls = calls
+    return res
+
+
+def _pairs(modes):
+    return np.array(sorted((m["frequency_per_rev"], m["real_per_rev"]) if isinstance(m, dict)
+                           else (m.frequency_per_rev, m.real_per_rev) for m in modes))
+
+
+@pytest.mark.parametrize("which", ["threaded", "processes"])
+def test_same_frequencies_as_direct_modal_analysis(which, request, direct):
+    """Reference: modal_analysis called directly at each speed (same elements and steps).
+    Tolerance: 1e-10 per-rev on every frequency and real part (the same computation; only
+    the BLAS thread count differs in worker processes).  Every mode of every speed is in
+    exactly one track."""
+    res = request.getfixturevalue(which)
+    assert np.allclose(res.speeds, SPEEDS, rtol=0, atol=0)
+    for i, w in enumerate(SPEEDS):
+        ref = direct[w]
+        got = _pairs(res.points[i]["modes"])
+        exp = _pairs(ref.modes)
+        assert got.shape == exp.shape
+        np.testing.assert_allclose(got, exp, rtol=0, atol=1e-10)
+        tracked = np.array(sorted((t.frequency_per_rev[i], t.real_per_rev[i])
+                                  for t in res.tracks if t.present()[i]))
+        np.testing.assert_allclose(tracked, exp, rtol=0, atol=1e-10)
+        hz = np.sort([t.frequency_hz[i] for t in res.tracks if t.present()[i]])
+        np.testing.assert_allclose(hz, np.sort([m.frequency_hz for m in ref.modes]),
+                                   rtol=0, atol=1e-10 * w / (2 * np.pi) + 1e-14)
+
+
+def test_process_pool_uses_workers_and_reports_progress(processes):
+    """Reference: the default executor is a process pool (work done outside this process);
+    progress goes from 0 to 1 with one call per speed plus the initial one (exact)."""
+    import os
+    assert all(p["pid"] != os.getpid() for p in processes.points)
+    fr = [f for f, _ in processes.progress_calls]
+    assert fr[0] == 0.0 and fr[-1] == 1.0 and len(fr) == len(SPEEDS) + 1
+    assert fr == sorted(fr)
+
+
+def test_tracks_keep_first_speed_labels(threaded, direct):
+    """Reference: the labels of the modes at the first speed (direct analysis); every track
+    starts there (no mode appears later at N = 2, 128 steps), and the MAC of each assignment
+    is >= 0.2 (the acceptance threshold)."""
+    assert len(threaded.tracks) == len(direct[SPEEDS[0]].modes)
+    from hawt_core.plotting import mode_label
+    assert [t.label for t in threaded.tracks] == [mode_label(m) for m in direct[SPEEDS[0]].modes]
+    for t in threaded.tracks:
+        assert t.present().all()
+        assert np.all(t.mac[1:] >= 0.2)
+
+
+def test_symmetric_flap_track_stiffens_and_matches_blade_modes(threaded, processes, turbine):
+    """Reference: hawt_core.blade_modes.blade_modes (one blade clamped on the spinning hub:
+    the symmetric flap modes do not couple with the rigid bodies), 1st flap mode at each
+    speed; tolerance 1e-6 relative on the frequency in Hz.  Centrifugal stiffening: the
+    track's frequency in Hz increases strictly with the rotor speed."""
+    for res in (threaded, processes):
+        t = res.track("1st symmetric flap")
+        assert t.family == "flap" and t.symmetry == "symmetric" and t.index == 1
+        assert np.all(np.diff(t.frequency_hz) > 0)
+        for i, w in enumerate(SPEEDS):
+            ref = [m for m in blade_modes(turbine, elements=ELEMENTS, rotor_speed=w).modes
+                   if m.family == "flap"][0]
+            assert abs(t.frequency_hz[i] - ref.frequency_hz) <= 1e-6 * ref.frequency_hz
+            assert abs(t.frequency_per_rev[i] - ref.frequency_per_rev) <= \
+                1e-6 * ref.frequency_per_rev
+
+
+def test_tracking_follows_permuted_and_missing_modes():
+    """Reference: a synthetic sweep whose modes are reordered between speeds (random complex
+    vectors, MAC near 1 with their own past, near 0 otherwise) and one mode that vanishes;
+    the Hungarian assignment must restore the order exactly (labels and values exact)."""
+    rng = np.random.default_rng(3)
+    m, k = 40, 5
+    V = rng.normal(size=(m, k)) + 1j * rng.normal(size=(m, k))
+    labels = [f"mode {j}" for j in range(k)]
+
+    def point(perm, freqs, noise):
+        W = V[:, perm] * np.exp(1j * rng.uniform(0, 6, len(perm))) \
+            + noise * (rng.normal(size=(m, len(perm))))
+        return {"modes": [{"label": labels[p], "family": "flap", "symmetry": "symmetric",
+                           "index": p + 1, "frequency_per_rev": freqs[p],
+                           "frequency_hz": freqs[p], "real_per_rev": 0.0,
+                           "damping_ratio": 0.0} for p in perm], "vectors": W}
+
+    f = np.arange(1.0, k + 1.0)
+    pts = [point([0, 1, 2, 3, 4], f, 0.0), point([3, 0, 4, 1, 2], f + 0.1, 0.05),
+           point([2, 4, 0, 1], f + 0.2, 0.05)]
+    tracks = track_modes(pts)
+    assert [t.label for t in tracks] == labels
+    for j, t in enumerate(tracks):
+        exp = [f[j], f[j] + 0.1, f[j] + 0.2 if j != 3 else np.nan]
+        np.testing.assert_array_equal(t.frequency_hz, exp)
+    assert not tracks[3].present()[2]
+
+
+def test_csv_header_and_row_count(processes, tmp_path):
+    """Reference: one row per (speed, mode) = sum of the mode counts (exact), the header
+    CSV_COLUMNS, speeds in rad/s and rpm (rpm = 60 w / 2 pi to 1e-9)."""
+    path = tmp_path / "campbell.csv"
+    processes.to_csv(path)
+    with open(path) as f:
+        rows = list(csv.reader(f))
+    assert tuple(rows[0]) == CSV_COLUMNS
+    body = rows[1:]
+    assert len(body) == sum(len(p["modes"]) for p in processes.points)
+    for r in body:
+        w, n = float(r[0]), float(r[1])
+        assert abs(n - 60 * w / (2 * np.pi)) < 1e-9
+        assert float(r[0]) in SPEEDS
+    assert {r[2] for r in body} == {t.label for t in processes.tracks}
+
+
+def test_plots_write_pngs(processes, direct, tmp_path):
+    """Reference: PNG signature and non-empty files; one file per Table 2 mode named
+    NN_family[_symmetry]_index.png (exact names), the combined picture, the Campbell diagram."""
+    res = direct[SPEEDS[1]]
+    out = plot_turbine_modes(res, tmp_path / "modes")
+    sel = table2_modes(res)
+    assert [p.name for p in out] == [f"{mode_file_stem(i, m)}.png" for i, m in
+                                     enumerate(sel, 1)]
+    assert any(p.name.endswith("_torsion_symmetric_1.png") for p in out)
+    for p in out:
+        data = p.read_bytes()
+        assert data.startswith(PNG) and len(data) > 5000
+    one = res.plot(tmp_path / "few.png", modes=["teeter", "flap antisymmetric 1",
+                                                ("torsion", "symmetric", 1)])
+    assert len(one) == 1 and one[0].read_bytes().startswith(PNG)
+    c = processes.plot(tmp_path / "campbell.png")
+    data = open(c, "rb").read()
+    assert data.startswith(PNG) and len(data) > 10000
+
+
+def test_mode_snapshot_amplitudes(direct):
+    """Reference: the 1st symmetric flap mode moves the blades only (no yaw, no teeter:
+    the paper's Fig. 1); the drawn rigid angles are below 1e-6 of the largest blade
+    deflection (tip-metre units)."""
+    from hawt_core.plotting import mode_snapshots
+    res = direct[SPEEDS[1]]
+    m = res.find("flap", "symmetric", 1)
+    t, ph, X = mode_snapshots(res, m)
+    lay = res.model.layout
+    R = res.model.turbine.hub.radius + res.model.turbine.blade.length
+    blade = max(np.abs(X[:, lay.blade(k).u[1:]]).max() for k in range(2))
+    rigid = R * np.abs(X[:, [lay["yaw"], lay["teeter"]]]).max()
+    assert len(t) == 4 and ph[0] == 0.0
+    assert rigid <= 1e-6 * blade
+
+
+@pytest.mark.parametrize("spec, field", [
+    ("abc:9:3", "START 'abc'"), ("3:x:3", "STOP 'x'"), ("3:9:1", "COUNT '1'"),
+    ("3:9:two", "COUNT 'two'"), ("0:9:3", "START '0'"), ("-1:9:3", "START '-1'"),
+    ("9:3:3", "STOP '3'"), ("3:9", "'3:9'")])
+def test_bad_speeds_one_line_error(spec, field, capsys):
+    """Reference: the CLI contract (one line on stderr naming the field and the value,
+    exit status 2, nothing on stdout)."""
+    rc = main(["campbell", "--speeds", spec])
+    err = capsys.readouterr()
+    assert rc == 2 and err.out == ""
+    lines = err.err.strip().splitlines()
+    assert len(lines) == 1 and "--speeds" in lines[0] and field in lines[0]
+
+
+def test_api_rejects_bad_speeds(turbine):
+    """Reference: ValueError naming the field 'speeds' (exact prefix)."""
+    for bad in ([], [0.0], [-1.0, 2.0], [float("nan")], "fast"):
+        with pytest.raises(ValueError, match="^speeds: "):
+            check_speeds(bad)
+    with pytest.raises(ValueError, match="^elements: "):
+        campbell(turbine, [5.0], elements=0, executor=cf.ThreadPoolExecutor(1))
+
+
+def test_cli_campbell_end_to_end(tmp_path, capsys):
+    """Reference: `hawt campbell` at 2 speeds writes the CSV (header + one row per mode and
+    speed) and the PNG and prints the table (exit status 0)."""
+    c, p = tmp_path / "c.csv", tmp_path / "c.png"
+    rc = main(["campbell", "--speeds", "5:6:2", "--elements", "2", "--steps", "128",
+               "--csv", str(c), "--plot", str(p), "--workers", "2"])
+    out = capsys.readouterr().out
+    assert rc == 0 and "Campbell diagram" in out
+    rows = c.read_text().strip().splitlines()
+    assert rows[0].split(",") == list(CSV_COLUMNS) and len(rows) > 2 * 10
+    assert p.read_bytes().startswith(PNG)
+
+
+def test_worker_returns_plain_data(turbine):
+    """Reference: the work unit's output pickles and holds only plain data (dicts, lists,
+    numbers, strings, ndarrays): what crosses a process or cluster boundary."""
+    import pickle
+    out = pickle.loads(pickle.dumps(campbell_point({"turbine": turbine, "speed": 6.0,
+                                                    "elements": 1, "steps": 64})))
+
+    def plain(x):
+        if isinstance(x, dict):
+            return all(isinstance(k, str) and plain(v) for k, v in x.items())
+        if isinstance(x, (list, tuple)):
+            return all(plain(v) for v in x)
+        return x is None or isinstance(x, (str, int, float, bool, np.ndarray, np.generic))
+    assert plain(out)
+    assert out["vectors"].shape[1] == len(out["modes"])
+    assert isinstance(CampbellResult, type)
