@@ -199,6 +199,7 @@ class HawtNode(Node):
                                         callback_group=self._sim_group)
         self.add_on_set_parameters_callback(self._on_set_parameters)
         s = self.settings
+        self._check_step_rate()
         self.get_logger().info(
             f"turbine '{self.turbine.name}' ({self.turbine_path}), {self.model.beam.N} elements "
             f"per blade, {self.n_blades} blades, rotor speed {self.omega:.4g} rad/s; "
@@ -221,6 +222,16 @@ class HawtNode(Node):
         if unknown:
             self.get_logger().warning(
                 f"unknown parameter(s) ignored: {', '.join(unknown)}; known: {', '.join(PARAMETERS)}")
+
+    def _check_step_rate(self) -> None:
+        """Every publish is a new simulation instant: warn when the simulation cannot provide
+        publish_rate of them (real_time_factor / step time)."""
+        s = self.settings
+        if s.real_time_factor > 0 and s.publish_rate > s.real_time_factor / self.dt * (1 + 1e-9):
+            self.get_logger().warning(
+                f"publish_rate {s.publish_rate:g} Hz exceeds the rate of new simulation instants "
+                f"real_time_factor / step = {s.real_time_factor / self.dt:.3g} Hz: publishing "
+                "will be at most that (raise real_time_factor or lower step_deg)")
 
     def _timer_period(self) -> float:
         if self.settings.real_time_factor == 0:
@@ -511,6 +522,7 @@ class HawtNode(Node):
                     self.record_path = ""
             self.settings = self.settings.replace(**changes)
             if "publish_rate" in changes or "real_time_factor" in changes:
+                self._check_step_rate()
                 self._anchor = None
                 self._timer.timer_period_ns = int(self._timer_period() * 1e9)
                 self._timer.reset()
