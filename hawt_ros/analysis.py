@@ -29,7 +29,7 @@ import numpy as np
 __all__ = ["AnalysisRunner", "Job", "result_to_plain", "WORKER_NICE"]
 
 #: Niceness added to analysis workers (lower CPU priority than the node's simulation).
-WORKER_NICE = 10
+WORKER_NICE = 5
 
 
 # ----------------------------------------------------------------------------- worker side
@@ -110,9 +110,33 @@ def result_to_plain(result) -> Dict[str, Any]:
             "compute_time": _num(getattr(result, "compute_time", math.nan))}
 
 
+def _die_with_parent() -> None:
+    """Make sure a worker never outlives the node (e.g. after a SIGKILL of the node): Linux
+    parent-death signal, plus a watchdog thread for other systems."""
+    parent = os.getppid()
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, signal.SIGKILL, 0, 0, 0)           # PR_SET_PDEATHSIG
+    except Exception:  # noqa: BLE001 - not Linux
+        pass
+    if os.getppid() != parent:
+        os._exit(1)
+
+    def watch():
+        while True:
+            time.sleep(1.0)
+            if os.getppid() != parent:
+                os._exit(1)
+
+    threading.Thread(target=watch, name="parent-watch", daemon=True).start()
+
+
 def _worker_main(conn, turbine, kwargs, cancel_event) -> None:
     """Entry point of an analysis worker process."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)     # the node decides when we stop
+    _die_with_parent()
     try:  # background work: the node's real-time simulation wins any contention for a core
         os.nice(WORKER_NICE)
     except OSError:
@@ -293,26 +317,32 @@ class AnalysisRunner:
             if job is None:
                 return
             if self._stopping.is_set():
-                job._finish("error", "the node is shutting down")
+                self._complete(job, "error", "the node is shutting down")
                 continue
             if job.cancel_requested:
-                job._finish("cancelled", "cancelled before it started")
+                self._complete(job, "cancelled", "cancelled before it started")
                 continue
             self._current = job
             try:
                 self._run(job)
             except Exception as exc:  # noqa: BLE001
-                job._finish("error", f"{type(exc).__name__}: {exc}")
+                self._complete(job, "error", f"{type(exc).__name__}: {exc}")
             finally:
                 self._current = None
-                with self._lock:
-                    if self._inflight.get(job.key) is job:
-                        del self._inflight[job.key]
-                    if job.status == "ok" and job.result is not None:
-                        self._cache[job.key] = job.result
-                        while len(self._cache) > self.cache_size:
-                            self._cache.popitem(last=False)
                 self.completed += 1
+
+    def _complete(self, job: Job, status: str, message: str = "", result=None) -> None:
+        """Cache the result and retire the job BEFORE waking its waiters, so that a request
+        sent right after the answer finds the cached result."""
+        with self._lock:
+            if self._inflight.get(job.key) is job:
+                del self._inflight[job.key]
+            if status == "ok" and result is not None:
+                self._cache[job.key] = result
+                self._cache.move_to_end(job.key)
+                while len(self._cache) > self.cache_size:
+                    self._cache.popitem(last=False)
+        job._finish(status, message, result)
 
     def _run(self, job: Job) -> None:
         job.status = "running"
@@ -328,6 +358,9 @@ class AnalysisRunner:
         outcome = None
         try:
             while outcome is None:
+                if (job.cancel_requested or self._stopping.is_set()) and cancel_sent is None:
+                    cancel_ev.set()
+                    cancel_sent = time.monotonic()
                 if parent.poll(0.05):
                     try:
                         msg = parent.recv()
@@ -343,10 +376,8 @@ class AnalysisRunner:
                         outcome = ("ok", "", msg[1])
                     else:
                         outcome = (msg[0], msg[1], None)
-                    continue
-                if (job.cancel_requested or self._stopping.is_set()) and cancel_sent is None:
-                    cancel_ev.set()
-                    cancel_sent = time.monotonic()
+                    if outcome is not None or cancel_sent is None:
+                        continue
                 if cancel_sent is not None and time.monotonic() - cancel_sent > self.cancel_grace:
                     proc.terminate()
                     proc.join(2.0)
@@ -371,7 +402,7 @@ class AnalysisRunner:
             status = "error"
         if status == "ok" and job.last_progress < 1.0:
             job._progress(1.0, "done")
-        job._finish(status, message, result)
+        self._complete(job, status, message, result)
 
     def shutdown(self, timeout: float = 3.0) -> None:
         """Cancel everything, stop the worker (terminate if needed) and the runner thread."""

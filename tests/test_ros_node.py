@@ -312,6 +312,33 @@ def test_rotor_loads_match_rigid_dynamics():
     assert np.allclose(pts[0, -1], -pts[1, -1])
 
 
+def test_analysis_runner_cache_coalescing_cancel(monkeypatch):
+    """The node's analysis runner (no ROS): identical requests share one job, a repeat right
+    after the answer is served from the cache, a running job is cancelled (worker stopped)."""
+    from hawt_core.io import load_turbine
+    from hawt_ros.analysis import AnalysisRunner
+
+    # the forkserver (started on first use) and its workers inherit this environment
+    monkeypatch.setenv("HAWT_ROS_FAKE", str(FAKES))
+    monkeypatch.setenv("HAWT_ROS_FAKE_PARTS", "modal")
+    monkeypatch.setenv("HAWT_FAKE_MODAL_SECONDS", "0.5")
+    runner = AnalysisRunner(load_turbine(), cancel_grace=0.5)
+    try:
+        kw = {"elements": 2, "rotor_speed": None, "steps": 64, "method": "radau"}
+        a = runner.submit(kw)
+        assert runner.submit(dict(kw)) is a
+        assert a.wait(60) and a.status == "ok", a.message
+        assert [m["frequency_per_rev"] for m in a.result["modes"]][:2] == [0.0, 1.0]
+        c = runner.submit(dict(kw))
+        assert c.done() and c.cached and c.result is a.result
+        d = runner.submit(dict(kw, steps=128), shareable=False)
+        wait_until(lambda: d.status == "running" and d.last_progress >= 0, 30.0)
+        d.cancel()
+        assert d.wait(10) and d.status == "cancelled"
+    finally:
+        runner.shutdown()
+
+
 # ============================================================================ node tests
 @ros
 def test_publishes_joint_states_blades_markers_at_rate(spawn):
