@@ -390,13 +390,13 @@ def cmd_call(args) -> int:
         _ros_done(rclpy, node)
     if resp is None:
         return EXIT_FAIL
+    if not resp.success:
+        print(f"hawt call modes: the node answered: {resp.message}", file=sys.stderr)
+        return EXIT_FAIL
     if args.json:
         print(json.dumps(modes_to_json(resp), indent=1))
     else:
         print(format_modes_table(resp))
-    if not resp.success:
-        print(f"hawt call modes: the node answered: {resp.message}", file=sys.stderr)
-        return EXIT_FAIL
     return 0
 
 

@@ -718,7 +718,7 @@ def test_bad_parameters_exit_with_clear_errors(ros_env, tmp_path):
 
 
 @ros
-def test_runtime_parameter_changes(spawn):
+def test_runtime_parameter_changes(spawn, tmp_path):
     from rcl_interfaces.msg import Parameter as ParamMsg, ParameterType, ParameterValue
     from rcl_interfaces.srv import SetParameters
 
@@ -757,6 +757,20 @@ def test_runtime_parameter_changes(spawn):
     rate = (len(items) - 1) / (items[-1][0] - items[0][0])
     print(f"\nafter publish_rate:=4.0: {rate:.2f} Hz")
     assert 3.0 <= rate <= 5.0
+    # recording switched on and off at runtime
+    from hawt_ros.mcap_io import bag_info
+
+    bag = tmp_path / "runtime.mcap"
+    assert set_param("record", str(bag)).successful
+    r = set_param("record", str(tmp_path / "other.mcap"))
+    assert not r.successful and "already recording" in r.reason
+    n1 = len(js)
+    wait_until(lambda: len(js) >= n1 + 4, 10.0, what="messages while recording")
+    assert set_param("record", "").successful
+    info = bag_info(bag)
+    assert info["finalized"] and info["topics"]["/joint_states"]["count"] >= 3
+    r = set_param("record", str(bag))
+    assert not r.successful and "exists" in r.reason
     assert node.alive()
 
 
