@@ -20,13 +20,12 @@ docs/ros.md.
 from __future__ import annotations
 
 import math
-import os
 import signal
 import sys
 import threading
 import time
 from pathlib import Path
-from typing import Any, Dict, List, Optional
+from typing import Dict, List, Optional
 
 import numpy as np
 

@@ -683,14 +683,14 @@ def test_record_info_echo_cli_from_live_topics(spawn, tmp_path):
     assert len(lines) == 2 and lines[0]["name"] == ["yaw", "teeter", "rotor_azimuth"]
     bag = tmp_path / "live.mcap"
     out = run_cli(["record", str(bag), "--topics", "/joint_states", "/blade_deflections",
-                   "--duration", "3"], node.domain, tmp_path)
+                   "--duration", "6"], node.domain, tmp_path)
     assert out.returncode == 0, out.stderr
     info = run_cli(["info", str(bag)], node.domain, tmp_path)
     assert info.returncode == 0 and "finalized" in info.stdout
     assert "/joint_states" in info.stdout and "sensor_msgs/msg/JointState" in info.stdout
     data = json.loads(run_cli(["info", str(bag), "--json"], node.domain, tmp_path).stdout)
     n = data["topics"]["/joint_states"]["count"]
-    print(f"\nhawt record 3 s: {n} joint states, "
+    print(f"\nhawt record 6 s (discovery included): {n} joint states, "
           f"{data['topics']['/blade_deflections']['count']} blade deflections")
     # (each topic is recorded from its own discovery on, so the counts need not pair up)
     assert n >= 10 and data["topics"]["/blade_deflections"]["count"] >= n
