@@ -89,7 +89,8 @@ def campbell_point(task: dict) -> dict:
     BLAS is limited to ``task.get("blas_threads", 1)`` thread(s) first.
 
     Returns ``{"speed", "modes": [mode dict + "label", ...], "vectors": complex (m, n_modes)
-    (display rows, tip metres), "settings", "unresolved", "compute_time", "pid"}``.
+    (display rows, tip metres), "settings", "unresolved", "compute_time", "warnings" (the
+    analysis' warning messages, collected instead of printed), "pid"}``.
     """
     global _LIMITED_PID
     from .modal import _display_rows, modal_analysis
@@ -97,9 +98,13 @@ def campbell_point(task: dict) -> dict:
     if task.get("parent_pid") not in (None, pid) and _LIMITED_PID != pid:
         limit_blas_threads(int(task.get("blas_threads", 1)))
         _LIMITED_PID = pid
-    res = modal_analysis(task["turbine"], elements=task.get("elements"),
-                         rotor_speed=float(task["speed"]), steps=task.get("steps"),
-                         method=task.get("method"))
+    import warnings
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        res = modal_analysis(task["turbine"], elements=task.get("elements"),
+                             rotor_speed=float(task["speed"]), steps=task.get("steps"),
+                             method=task.get("method"))
+    messages = list(dict.fromkeys(f"{w.category.__name__}: {w.message}" for w in caught))
     rows, wts = _display_rows(res.model)
     X = res.floquet.eigenvectors
     cols = [m.column for m in res.modes]
@@ -113,7 +118,7 @@ def campbell_point(task: dict) -> dict:
     return {"speed": float(res.model.rotor_speed), "modes": modes,
             "vectors": np.ascontiguousarray(vectors), "settings": dict(res.settings),
             "unresolved": int(res.unresolved), "compute_time": float(res.compute_time),
-            "pid": pid}
+            "warnings": messages, "pid": pid}
 
 
 # ---------------------------------------------------------------------------- result
@@ -200,6 +205,10 @@ class CampbellResult:
             vals = "".join(f"{t.frequency_hz[i]:>15.4f}" if np.isfinite(t.frequency_hz[i])
                            else f"{'-':>15}" for t in self.tracks)
             lines.append(f"{w:>8.3f}{n:>8.2f} {vals}")
+        warned = [f"{p['speed']:.4g}" for p in self.points if p.get("warnings")]
+        if warned:
+            lines.append(f"warnings from the Floquet analysis at {len(warned)} speed(s) "
+                         f"({', '.join(warned)} rad/s): see points[i]['warnings']")
         lines.append(f"computed in {self.compute_time:.2f} s")
         return "\n".join(lines)
 

@@ -241,6 +241,8 @@ def _draw_mode(axes, result, mode, instants=MODE_INSTANTS):
               TWIST_AMPLITUDE / twist if twist > 0 else np.inf)
     amp = amp if np.isfinite(amp) else 1.0
     cmap = _pyplot().get_cmap("viridis")
+    # a non-oscillating mode (free yaw) is drawn at rotor azimuths over one revolution
+    what = "phase" if abs(mode.frequency_per_rev) > 1e-6 else "azimuth"
     R = geom.R
     for ax, view in zip(axes[:2], ("front", "side")):
         _draw_rotor(ax, P0, h0, P0[:, 0], view, color="0.55", ls="--", lw=1.0)
@@ -250,7 +252,7 @@ def _draw_mode(axes, result, mode, instants=MODE_INSTANTS):
             col = cmap(j / max(1, len(disp) - 1) * 0.9)
             pts, hub = P0 + amp * dP, h0 + amp * dh
             ln = _draw_rotor(ax, pts, hub, pts[:, 0], view, color=col, lw=1.8)
-            ln[0].set_label(f"phase {phases[j]:.0f}°")
+            ln[0].set_label(f"{what} {phases[j]:.0f}°")
             ix = 1 if view == "front" else 2
             ax.plot([hub[ix]], [hub[0]], "o", color=col, ms=5)
         ax.plot([h0[1 if view == "front" else 2]], [h0[0]], "o", mfc="none", mec="0.4", ms=9)
