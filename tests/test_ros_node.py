@@ -513,14 +513,13 @@ def test_action_progress_and_cancel(spawn):
 @ros
 def test_concurrent_service_calls_quarter_invalid(spawn):
     """50 calls from 5 client nodes at once, every 4th invalid: all answered, node alive.
-    (The fake analysis, 0.3 s each, keeps this test about the ROS plumbing.)"""
-    node, cli = spawn({"publish_rate": 10.0, "real_time_factor": 0.25}, fake="modal")
+    Two distinct small valid analyses (real modal_analysis): the others share or reuse them."""
+    node, cli = spawn({"publish_rate": 10.0, "real_time_factor": 0.25})
     js = cli.subscribe(JointState, "/joint_states")
     first_message(node, js)
     invalid = [dict(rotor_speed=-1.0), dict(rotor_speed=float("nan")), dict(steps=2_000_000),
                dict(elements=100000), dict(method="euler"), dict(steps=3)]
-    valid = [dict(elements=2, steps=64), dict(elements=3, steps=64), dict(elements=2, steps=32),
-             dict()]
+    valid = [dict(elements=2, steps=32), dict(elements=2, steps=48)]
     answers = []
     lock = threading.Lock()
     clients = [cli.node.create_client(ModalAnalysis, "/modal_analysis") for _ in range(5)]
@@ -533,7 +532,7 @@ def test_concurrent_service_calls_quarter_invalid(spawn):
             bad = n % 4 == 3
             kw = invalid[n % len(invalid)] if bad else valid[n % len(valid)]
             t = time.monotonic()
-            r = cli.result(clients[ci].call_async(ModalAnalysis.Request(**kw)), 90.0)
+            r = cli.result(clients[ci].call_async(ModalAnalysis.Request(**kw)), 180.0)
             with lock:
                 answers.append((bad, kw, r.success, r.message, time.monotonic() - t))
 
@@ -542,7 +541,7 @@ def test_concurrent_service_calls_quarter_invalid(spawn):
     for t in threads:
         t.start()
     for t in threads:
-        t.join(150)
+        t.join(240)
     total = time.monotonic() - t0
     assert len(answers) == 50, f"only {len(answers)} answers"
     lat = sorted(a[4] for a in answers)
