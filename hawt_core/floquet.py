@@ -388,16 +388,18 @@ class _Stepper:
         n = c.dae.n
         pE, pA = c.pE, c.pA
         if self.method == "radau":
+            # unknowns and rows interleaved by stage (index 3 i + stage): the stage system keeps
+            # the band structure of E and A, so the sparse LU has little fill
             rows, cols = [], []
             for j in range(3):
                 for l in range(3):
-                    rows.append(pE.rows + j * n)
-                    cols.append(pE.cols + l * n)
+                    rows.append(3 * pE.rows + j)
+                    cols.append(3 * pE.cols + l)
             for j in range(3):
-                rows.append(pA.rows + j * n)
-                cols.append(pA.cols + j * n)
+                rows.append(3 * pA.rows + j)
+                cols.append(3 * pA.cols + j)
             self.lhs = _Assembler(np.concatenate(rows), np.concatenate(cols), (3 * n, 3 * n))
-            self.rhs = _Assembler(np.concatenate([pE.rows + j * n for j in range(3)]),
+            self.rhs = _Assembler(np.concatenate([3 * pE.rows + j for j in range(3)]),
                                   np.concatenate([pE.cols] * 3), (3 * n, n))
         else:
             # differential rows (E row nonzero somewhere): central differencing about t+h/2;
@@ -429,7 +431,7 @@ class _Stepper:
             lu = spla.splu(L)
             self.factorizations += 1
             Xs = lu.solve(np.asarray(R @ X))
-            return Xs[2 * n:]
+            return Xs[2::3]
         Em, Am = Ed[0] / h, 0.5 * Ad[0][self.a_mid]
         L = self.lhs.matrix(np.concatenate([Em, -Am, -Ad[1][self.a_end]]))
         R = self.rhs.matrix(np.concatenate([Em, Am]))

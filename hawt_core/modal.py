@@ -176,7 +176,7 @@ def periodic_dae(model: TurbineModel, steady) -> LinearPeriodicDAE:
     def jac(t):
         t = float(t)
         if t not in cache:
-            if len(cache) > 8:
+            if len(cache) > 64:
                 cache.clear()
             Jy, Jd = model.jacobians(steady.rate_at(t), steady.at(t), t)
             cache[t] = (Jd, -Jy)
@@ -210,8 +210,9 @@ def _display_rows(model: TurbineModel):
 
 
 def _averaged_modes(dae: LinearPeriodicDAE, rows, weights, omega):
-    """Finite eigenpairs of the time-averaged pencil (exact average of harmonics up to 3)."""
-    ts = np.arange(8) * dae.period / 8
+    """Finite eigenpairs of the time-averaged pencil (exact for harmonics up to 4; the
+    5-point grid is the Fourier sampler's first grid, so these linearizations are cached)."""
+    ts = dae.period * np.arange(5) / 5
     E0 = sum(dae.E(t).toarray() for t in ts) / len(ts)
     A0 = sum(dae.A(t).toarray() for t in ts) / len(ts)
     As, Es, c = equilibrate(A0, E0)
@@ -378,7 +379,9 @@ def modal_analysis(turbine: Turbine, elements: Optional[int] = None,
     resolved = []
     unresolved = 0
     for i in fl.modes():
-        if abs(fl.multipliers[i]) < 1e-12:  # annihilated by the marching: not a resolved mode
+        # annihilated by the marching (|multiplier| < 1e-8: it would decay by e^-18 within a
+        # revolution) or without a dominant harmonic: an unresolved mesh mode, not a result
+        if abs(fl.multipliers[i]) < 1e-8 or fl.harmonic_share[i] < 0.05:
             unresolved += 1
             continue
         v = fl.eigenvectors[rows, i] * wts
