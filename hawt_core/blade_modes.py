@@ -348,8 +348,11 @@ class SpinningBlade:
         return self.beam.residual(ydot[None], y[None], self.v[None], self.w[None])[0]
 
     def jacobians(self, ydot, y, t=0.0):
-        Jy = self._jac(lambda yy: self.residual(ydot, yy), y)
-        Jd = self._jac(lambda yd: self.residual(yd, y), ydot)
+        C = self._jac.n_colours
+        rep = lambda a: np.broadcast_to(a, (C,) + np.shape(a))
+        V, W = rep(self.v), rep(self.w)
+        Jy = self._jac.batched(lambda Y: self.beam.residual(rep(ydot), Y, V, W), y)
+        Jd = self._jac.batched(lambda Yd: self.beam.residual(Yd, rep(y), V, W), ydot)
         return Jy, Jd
 
     def steady_state(self) -> np.ndarray:
