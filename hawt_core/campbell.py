@@ -34,9 +34,12 @@ from .model import Turbine
 FREQUENCY_WEIGHT = 0.05
 #: Below this MAC, an assignment is refused (the mode starts a new track).
 MIN_MAC = 0.2
+#: A vector matched with a MAC below this does not become the track's reference vector.
+KEEP_MAC = 0.7
 
 CSV_COLUMNS = ("speed_rad_s", "speed_rpm", "track", "family", "symmetry", "index",
-               "frequency_per_rev", "frequency_hz", "real_per_rev", "damping_ratio", "mac")
+               "frequency_per_rev", "frequency_hz", "real_per_rev", "damping_ratio", "mac",
+               "harmonic_shift", "continuous_hz")
 
 
 # ---------------------------------------------------------------------------- BLAS threads
@@ -136,6 +139,24 @@ class Track:
     real_per_rev: np.ndarray
     damping_ratio: np.ndarray
     mac: np.ndarray = field(repr=False)
+    #: integer per-rev added to the dominant frequency for a continuous curve (see
+    #: :func:`unwrap_harmonics`); 0 where absent
+    shift: np.ndarray = field(default=None, repr=False)
+    #: frequency_per_rev + shift, and the same in Hz: what the Campbell plot draws
+    continuous_per_rev: np.ndarray = field(default=None, repr=False)
+    continuous_hz: np.ndarray = field(default=None, repr=False)
+
+    def __post_init__(self):
+        if self.shift is None:
+            self.shift = np.where(np.isfinite(self.frequency_per_rev), 0.0, np.nan)
+        if self.continuous_per_rev is None:
+            self.continuous_per_rev = self.frequency_per_rev + np.nan_to_num(self.shift)
+        if self.continuous_hz is None:
+            with np.errstate(invalid="ignore", divide="ignore"):
+                ratio = np.where(self.frequency_per_rev != 0,
+                                 self.frequency_hz / self.frequency_per_rev, np.nan)
+            self.continuous_hz = np.where(np.nan_to_num(self.shift) == 0, self.frequency_hz,
+                                          self.continuous_per_rev * ratio)
 
     def present(self) -> np.ndarray:
         return np.isfinite(self.frequency_hz)
@@ -151,6 +172,11 @@ class CampbellResult:
     points: list = field(repr=False)
     settings: dict = field(default_factory=dict)
     compute_time: float = 0.0
+
+    @property
+    def failed(self) -> list:
+        """(speed, error message) of the speeds whose analysis failed."""
+        return [(p["speed"], p["error"]) for p in self.points if p.get("error")]
 
     @property
     def rpm(self) -> np.ndarray:
@@ -176,7 +202,8 @@ class CampbellResult:
                             "frequency_hz": float(t.frequency_hz[i]),
                             "real_per_rev": float(t.real_per_rev[i]),
                             "damping_ratio": float(t.damping_ratio[i]),
-                            "mac": float(t.mac[i])})
+                            "mac": float(t.mac[i]), "harmonic_shift": int(t.shift[i]),
+                            "continuous_hz": float(t.continuous_hz[i])})
         return out
 
     def to_csv(self, path) -> str:
@@ -205,6 +232,8 @@ class CampbellResult:
             vals = "".join(f"{t.frequency_hz[i]:>15.4f}" if np.isfinite(t.frequency_hz[i])
                            else f"{'-':>15}" for t in self.tracks)
             lines.append(f"{w:>8.3f}{n:>8.2f} {vals}")
+        for w, msg in self.failed:
+            lines.append(f"analysis failed at {w:.4g} rad/s: {msg}")
         warned = [f"{p['speed']:.4g}" for p in self.points if p.get("warnings")]
         if warned:
             lines.append(f"warnings from the Floquet analysis at {len(warned)} speed(s) "
@@ -222,8 +251,9 @@ def _mac_matrix(A: np.ndarray, B: np.ndarray) -> np.ndarray:
 
 
 def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
-                frequency_weight: float = FREQUENCY_WEIGHT) -> list:
-    """Tracks from per-speed outputs of :func:`campbell_point` (sorted by speed)."""
+                frequency_weight: float = FREQUENCY_WEIGHT, keep_mac: float = KEEP_MAC) -> list:
+    """Tracks from per-speed outputs of :func:`campbell_point` (sorted by speed).  A track's
+    reference vector is its latest one matched with MAC >= ``keep_mac``."""
     S = len(points)
     tracks: list = []          # dicts: label info, per-speed values, last vector and frequency
 
@@ -237,7 +267,11 @@ def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
     def put(t, i, m, v, mac):
         t["vals"][i] = (m["frequency_per_rev"], m["frequency_hz"], m["real_per_rev"],
                         m["damping_ratio"], mac)
-        t["vec"], t["f"] = v, m["frequency_hz"]
+        t["f"] = m["frequency_hz"]
+        if not mac < keep_mac:
+            # a poorly matching vector (two nearly equal multipliers whose eigenvectors mix)
+            # does not replace the track's reference: the next clean speed matches the clean one
+            t["vec"] = v
 
     for i, p in enumerate(points):
         modes, V = p["modes"], p["vectors"]
@@ -264,6 +298,7 @@ def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
         for j, m in enumerate(modes):
             if j not in taken:
                 put(new_track(i, m, V[:, j]), i, m, V[:, j], float("nan"))
+    speeds = np.array([float(p.get("speed", np.nan)) for p in points])
     # unique labels (a label reused by a track born later gets a suffix)
     seen = {}
     out = []
@@ -273,10 +308,47 @@ def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
         if seen[lab] > 1:
             lab = f"{lab} #{seen[lab]}"
         v = t["vals"]
+        shift = unwrap_harmonics(speeds, v[:, 0])
+        cont = v[:, 0] + np.nan_to_num(shift)
         out.append(Track(label=lab, family=t["family"], symmetry=t["symmetry"],
                          index=t["index"], frequency_per_rev=v[:, 0], frequency_hz=v[:, 1],
-                         real_per_rev=v[:, 2], damping_ratio=v[:, 3], mac=v[:, 4]))
+                         real_per_rev=v[:, 2], damping_ratio=v[:, 3], mac=v[:, 4],
+                         shift=shift, continuous_per_rev=cont,
+                         continuous_hz=np.where(np.nan_to_num(shift) == 0, v[:, 1],
+                                                cont * speeds / (2 * np.pi))))
     return out
+
+
+def unwrap_harmonics(speeds: np.ndarray, per_rev: np.ndarray, tol: float = 0.25) -> np.ndarray:
+    """Integer per-rev shifts that make a track continuous.
+
+    A Floquet exponent is defined up to i k Omega; modal_analysis reports the dominant
+    harmonic, which can jump by an integer per-rev from one speed to the next (e.g. where two
+    multipliers nearly coincide and the eigenvectors mix).  Going up in speed, each value is
+    compared with the prediction from the track's previous (continuous) values, linear in Hz
+    from the last two (constant Hz from one); the nearest integer shift is applied when it
+    brings the value within ``tol`` per-rev of the prediction.  The first value is never
+    shifted.  NaN where the track is absent; all zeros when the speeds are unknown."""
+    per_rev = np.asarray(per_rev, float)
+    shift = np.where(np.isfinite(per_rev), 0.0, np.nan)
+    if not np.all(np.isfinite(speeds)):
+        return shift
+    hist = []                                   # (speed, continuous Hz)
+    for i, (w, f) in enumerate(zip(speeds, per_rev)):
+        if not np.isfinite(f):
+            continue
+        if hist:
+            if len(hist) >= 2 and hist[-1][0] != hist[-2][0]:
+                (wa, ca), (wb, cb) = hist[-2], hist[-1]
+                pred_hz = cb + (cb - ca) / (wb - wa) * (w - wb)
+            else:
+                pred_hz = hist[-1][1]
+            pred = pred_hz * 2 * np.pi / w
+            k = float(np.round(pred - f))
+            if k != 0 and abs(f + k - pred) < tol:
+                shift[i] = k
+        hist.append((w, (f + shift[i]) * w / (2 * np.pi)))
+    return shift
 
 
 # ---------------------------------------------------------------------------- driver
@@ -294,15 +366,29 @@ def check_speeds(speeds) -> np.ndarray:
     return arr
 
 
+def _failed_point(speed: float, exc: BaseException, rows: int) -> dict:
+    return {"speed": float(speed), "modes": [], "vectors": np.zeros((rows, 0), complex),
+            "settings": {}, "unresolved": 0, "compute_time": 0.0, "warnings": [],
+            "error": f"{type(exc).__name__}: {' '.join(str(exc).split())}", "pid": None}
+
+
 def campbell(turbine: Turbine, speeds, elements: Optional[int] = None,
              steps: Optional[int] = None, method: Optional[str] = None,
              executor: Optional[cf.Executor] = None,
-             progress: Optional[Callable[[float, str], None]] = None) -> CampbellResult:
+             progress: Optional[Callable[[float, str], None]] = None,
+             errors: str = "skip") -> CampbellResult:
     """Floquet modal analysis of ``turbine`` at every rotor speed of ``speeds`` [rad/s]
     (run as :func:`campbell_point` tasks on ``executor``; default a ProcessPoolExecutor with
     ``os.cpu_count()`` workers, shut down afterwards; a given executor is left running), modes
     tracked by MAC + Hungarian assignment.  ``progress(fraction, message)`` is called as
-    speeds complete.  The speeds are analysed and reported in ascending order."""
+    speeds complete.  The speeds are analysed and reported in ascending order.
+
+    ``errors``: "skip" (default) keeps going when the analysis fails at a speed (e.g. a steady
+    state that does not converge): that point gets no modes and an ``"error"`` message
+    (``CampbellResult.failed``); if every speed fails the first error is raised.  "raise"
+    raises the first failure."""
+    if errors not in ("skip", "raise"):
+        raise ValueError(f"errors: {errors!r} is not allowed; use 'skip' or 'raise'")
     from .modal import validate_request
     arr = np.sort(check_speeds(speeds))
     validate_request(elements, None, steps, method)
@@ -321,9 +407,15 @@ def campbell(turbine: Turbine, speeds, elements: Optional[int] = None,
             done_iter = cf.as_completed(futures)
         else:  # foreign futures: wait in order
             done_iter = iter(futures)
+        failures = []
         for n, f in enumerate(done_iter, 1):
             i = futures[f]
-            results[i] = f.result()
+            try:
+                results[i] = f.result()
+            except (ValueError, RuntimeError, ArithmeticError, np.linalg.LinAlgError) as exc:
+                if errors == "raise" or isinstance(exc, cf.CancelledError):
+                    raise
+                failures.append((i, exc))
             if progress is not None:
                 progress(n / len(tasks), f"{n}/{len(tasks)} speeds "
                                          f"({arr[i]:.4g} rad/s done)")
@@ -337,8 +429,14 @@ def campbell(turbine: Turbine, speeds, elements: Optional[int] = None,
     finally:
         if own:
             executor.shutdown(wait=True, cancel_futures=True)
+    ok = [r for r in results if r is not None]
+    if not ok:
+        raise failures[0][1]
+    rows = ok[0]["vectors"].shape[0]
+    for i, exc in failures:
+        results[i] = _failed_point(arr[i], exc, rows)
     tracks = track_modes(results)
-    s0 = results[0]["settings"]
+    s0 = ok[0]["settings"]
     settings = {"turbine": turbine.name, "elements": s0["elements"], "method": s0["method"],
                 "steps": s0["steps"], "fast": s0["fast"], "speeds": arr.tolist(),
                 "workers": getattr(executor, "_max_workers", None)}

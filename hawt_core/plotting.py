@@ -364,18 +364,21 @@ def plot_turbine_modes(result, path_or_dir, modes=None) -> list:
 
 
 # ============================================================================ Campbell diagram
-def plot_campbell(result, path, max_hz=None) -> Path:
+def plot_campbell(result, path, max_hz=None, max_rays: int = 12) -> Path:
     """Campbell diagram of a CampbellResult: frequency [Hz] of every track against the rotor
-    speed [rpm] with the 1P..nP excitation rays, and the damping ratios below. PNG."""
+    speed [rpm] with the 1P..nP excitation rays (n <= max_rays), and the damping ratios below.
+    The curves are the tracks' continuous frequencies (the dominant frequency plus the integer
+    per-rev that keeps a track continuous; such points are circled). PNG."""
+    any_shift = False
     plt = _pyplot()
     rpm = np.asarray(result.rpm, float)
     tracks = list(result.tracks)
-    fmax = max([np.nanmax(t.frequency_hz) for t in tracks if np.any(t.present())] or [1.0])
+    fmax = max([np.nanmax(t.continuous_hz) for t in tracks if np.any(t.present())] or [1.0])
     top = float(max_hz) if max_hz else 1.05 * fmax
     fig, (ax, axd) = plt.subplots(2, 1, figsize=(9, 8.5), sharex=True,
                                   gridspec_kw={"height_ratios": [3, 1.3]})
     rev_hz = rpm[-1] / 60.0 if len(rpm) else 1.0
-    nmax = max(1, int(math.ceil(top / max(rev_hz, 1e-12))))
+    nmax = min(max_rays, max(1, int(math.ceil(top / max(rev_hz, 1e-12)))))
     x = np.array([0.0, rpm.max() * 1.02 if len(rpm) else 1.0])
     for n in range(1, nmax + 1):
         ax.plot(x, n * x / 60.0, color="0.8", lw=0.8, zorder=0)
@@ -388,15 +391,25 @@ def plot_campbell(result, path, max_hz=None) -> Path:
                "axial": "x", "shear2": "+", "shear3": "+"}
     for i, t in enumerate(tracks):
         ok = t.present()
-        if not ok.any() or np.nanmax(t.frequency_hz) > top * 1.001 and np.nanmin(t.frequency_hz) > top:
+        if not ok.any() or np.nanmin(t.continuous_hz) > top:
             continue
         col = f"C{i % 10}"
         ls = styles.get(t.symmetry or "", "-")
         mk = markers.get(t.family, ".")
-        ax.plot(rpm, t.frequency_hz, ls=ls, marker=mk, ms=3.5, color=col, label=t.label)
+        ax.plot(rpm, t.continuous_hz, ls=ls, marker=mk, ms=3.5, color=col, label=t.label)
+        shifted = np.nan_to_num(t.shift) != 0
+        if shifted.any():
+            ax.plot(rpm[shifted], t.continuous_hz[shifted], ls="none", marker="o", ms=8,
+                    mfc="none", mec=col)
+            any_shift = True
         axd.plot(rpm, t.damping_ratio, ls=ls, marker=mk, ms=3.5, color=col)
     ax.set_ylim(0.0, top)
-    ax.set_xlim(x[0], x[1])
+    lo = rpm.min() if len(rpm) else 0.0
+    span = (rpm.max() - lo) if len(rpm) else 1.0
+    ax.set_xlim(max(0.0, lo - 0.05 * max(span, 1e-9 + lo * 0.1)), x[1])
+    if any_shift:
+        ax.text(0.99, 0.01, "circled: dominant harmonic moved by whole per-rev for continuity",
+                transform=ax.transAxes, ha="right", va="bottom", fontsize=7, color="0.4")
     ax.set_ylabel("frequency [Hz]")
     ax.set_title(f"Campbell diagram: {result.settings.get('turbine', '')}\n"
                  f"{result.settings.get('elements')} elements, "

@@ -252,3 +252,64 @@ def test_worker_returns_plain_data(turbine):
     assert plain(out)
     assert out["vectors"].shape[1] == len(out["modes"])
     assert isinstance(CampbellResult, type)
+
+
+def test_unwrap_harmonics_restores_continuity():
+    """Reference: a smooth track f(w) = 2.0 + 0.1 w [Hz] whose dominant per-rev value jumps
+    by +2 and -1 per-rev at two speeds (the Floquet integer-per-rev ambiguity); the shifts
+    undo the jumps exactly and leave the first value and absent points alone."""
+    from hawt_core.campbell import unwrap_harmonics
+    w = np.linspace(3.0, 9.0, 7)
+    hz = 2.0 + 0.1 * w
+    pr = hz * 2 * np.pi / w
+    raw = pr.copy()
+    raw[3] += 2.0
+    raw[5] -= 1.0
+    raw[4] = np.nan
+    sh = unwrap_harmonics(w, raw)
+    exp = np.array([0, 0, 0, -2, np.nan, 1, 0], float)
+    np.testing.assert_array_equal(sh, exp)
+    ok = np.isfinite(raw)
+    np.testing.assert_allclose((raw + np.nan_to_num(sh))[ok], pr[ok], rtol=0, atol=1e-12)
+
+
+def test_sweep_through_a_harmonic_flip_keeps_one_track(turbine):
+    """Reference: at N = 2, 128 steps, 7 rad/s the 1st antisymmetric lag (4.36/rev) is
+    reported 2 per-rev higher (its multiplier nearly equals the 2nd torsion pair's, the
+    eigenvectors mix; MAC to the 6 rad/s vector about 0.4).  Over 5..7 rad/s (below the
+    teeter/yaw coalescence near 8 rad/s, where the low modes reorganize) the track must
+    continue through it (no duplicate '#2' track), its continuous frequency must be smooth
+    (second differences in Hz < 2e-3 Hz on the uniform speed grid) and the flip undone by an
+    integer shift of exactly -2 per-rev."""
+    with cf.ThreadPoolExecutor(max_workers=2) as pool:
+        res = campbell(turbine, np.linspace(5.0, 7.0, 5), elements=ELEMENTS, steps=STEPS,
+                       executor=pool)
+    assert not any("#" in t.label for t in res.tracks)
+    t = res.track("1st antisymmetric lag")
+    assert t.present().all()
+    assert np.nanmax(np.abs(np.diff(t.continuous_hz, 2))) < 2e-3
+    k = int(np.argmin(np.abs(res.speeds - 7.0)))
+    assert t.shift[k] == -2 and abs(t.frequency_per_rev[k] - t.continuous_per_rev[k] - 2) < 1e-12
+
+
+def test_failed_speed_is_skipped(turbine, monkeypatch):
+    """Reference: an analysis that raises at one speed (patched modal_analysis, thread pool)
+    leaves that speed without modes, with its error message, and the other speeds intact;
+    errors='raise' re-raises it (exact)."""
+    import hawt_core.modal as modal
+    real = modal.modal_analysis
+
+    def flaky(turbine, rotor_speed=None, **kw):
+        if rotor_speed == 5.5:
+            raise RuntimeError("steady state: Newton did not converge (test)")
+        return real(turbine, rotor_speed=rotor_speed, **kw)
+    monkeypatch.setattr(modal, "modal_analysis", flaky)
+    with cf.ThreadPoolExecutor(max_workers=2) as pool:
+        res = campbell(turbine, [5.0, 5.5, 6.0], elements=1, steps=64, executor=pool)
+        assert [w for w, _ in res.failed] == [5.5]
+        assert "converge" in res.failed[0][1]
+        assert all(not t.present()[1] for t in res.tracks)
+        assert res.points[0]["modes"] and res.points[2]["modes"]
+        assert "analysis failed at 5.5 rad/s" in res.table()
+        with pytest.raises(RuntimeError, match="converge"):
+            campbell(turbine, [5.0, 5.5], elements=1, steps=64, executor=pool, errors="raise")
