@@ -48,13 +48,19 @@ class StateLayout:
     """Names for the turbine state vector: ``layout["teeter"]`` (an int index),
     ``layout.blade(k)`` (a BladeLayout), ``layout.names()`` (one name per unknown)."""
 
-    def __init__(self, rigid: RigidSystem, n_blades: int, beam: BeamElements):
+    def __init__(self, rigid: RigidSystem, n_blades: int, beam: BeamElements,
+                 tower: Optional[BeamElements] = None):
         self.rigid_names = tuple(rigid.coordinates) + tuple(rigid.speeds)
         self.n_rigid = len(self.rigid_names)
         self.n_blades = n_blades
         self.n_beam = beam.n
         self.N = beam.N
         self.n = self.n_rigid + n_blades * beam.n
+        #: offset of the tower unknowns (after the blades), None for a rigid tower
+        self.tower_offset = self.n if tower is not None else None
+        self.n_tower = tower.n if tower is not None else 0
+        self.N_tower = tower.N if tower is not None else 0
+        self.n += self.n_tower
         self._index = {name: i for i, name in enumerate(self.rigid_names)}
         aliases = {"yaw_rate": ("yaw_rate", "yaw_speed"), "teeter_rate": ("teeter_speed",)}
         for alias, names in aliases.items():
@@ -62,10 +68,25 @@ class StateLayout:
                 if nm in self._index:
                     self._index.setdefault(alias, self._index[nm])
         self._blades = [self._blade_layout(k) for k in range(n_blades)]
+        self._tower = (self._blade_layout(None) if tower is not None else None)
 
-    def _blade_layout(self, k: int) -> BladeLayout:
-        off = self.blade_offset(k)
-        N = self.N
+    @property
+    def has_tower(self) -> bool:
+        return self._tower is not None
+
+    def tower(self) -> BladeLayout:
+        """Index arrays of the flexible tower's unknowns (BladeLayout fields; ``u``,
+        ``theta`` in the inertial tower root frame t: t1 up, t2 lateral, t3 downwind;
+        ``root_force``/``root_moment``: the loads the tower exerts on the ground)."""
+        if self._tower is None:
+            raise ValueError("tower: this turbine's tower is rigid (no tower unknowns)")
+        return self._tower
+
+    def _blade_layout(self, k) -> BladeLayout:
+        if k is None:   # the tower
+            off, N = self.tower_offset, self.N_tower
+        else:
+            off, N = self.blade_offset(k), self.N
         blk = off + ROOT_SIZE + np.arange(N * BLOCK_SIZE).reshape(N, BLOCK_SIZE)
         neg = -np.ones((1, 3), int)
         return BladeLayout(
@@ -111,7 +132,23 @@ class StateLayout:
                 loc[c] = f"blade{k}.root_force.{c + 1}"
                 loc[3 + c] = f"blade{k}.root_moment.{c + 1}"
             out += loc
+        if self._tower is not None:
+            out += self._beam_names(self._tower, self.tower_offset, self.n_tower, "tower")
         return out
+
+    @staticmethod
+    def _beam_names(bl, off, n, prefix):
+        loc = [""] * n
+        for field in ("u", "theta", "V", "Omega", "F", "M"):
+            for i, row in enumerate(getattr(bl, field)):
+                for c, j in enumerate(row):
+                    if j >= 0:
+                        lbl = f"{field}[{i + (field in ('F', 'M'))}]"
+                        loc[j - off] = f"{prefix}.{lbl}.{c + 1}"
+        for c in range(3):
+            loc[c] = f"{prefix}.root_force.{c + 1}"
+            loc[3 + c] = f"{prefix}.root_moment.{c + 1}"
+        return loc
 
 
 class TurbineModel:
@@ -126,9 +163,6 @@ class TurbineModel:
             turbine = turbine.with_rotor_speed(rotor_speed)
         if elements is not None:
             turbine = turbine.with_elements(elements)
-        if turbine.tower is not None:
-            raise NotImplementedError("tower: a flexible tower is not supported yet; "
-                                      "omit it (rigid tower)")
         self.turbine = turbine
         self.rotor_speed = float(turbine.rotor.speed)
         self.period = 2 * np.pi / self.rotor_speed if self.rotor_speed > 0 else np.inf
@@ -136,17 +170,51 @@ class TurbineModel:
         self.beam = BeamElements(mesh_beam(turbine.blade))
         self.n_blades = int(turbine.rotor.blades)
         self.nq, self.nu = self.rigid.n_q, self.rigid.n_u
-        self.layout = StateLayout(self.rigid, self.n_blades, self.beam)
+        #: the flexible tower's beam (None: rigid tower)
+        self.tower = BeamElements(mesh_beam(turbine.tower)) if turbine.tower is not None else None
+        self.layout = StateLayout(self.rigid, self.n_blades, self.beam, self.tower)
         self.n = self.layout.n
         self.differential = np.concatenate(
-            [np.ones(self.nq + self.nu, bool), np.tile(self.beam.differential, self.n_blades)])
+            [np.ones(self.nq + self.nu, bool), np.tile(self.beam.differential, self.n_blades)]
+            + ([self.tower.differential] if self.tower is not None else []))
         self.gravity = bool(turbine.gravity.enabled)
+        if self.tower is not None:
+            to, Nt = self.layout.tower_offset, self.tower.N
+            last = to + ROOT_SIZE + (Nt - 1) * BLOCK_SIZE   # the tip node's element block
+            #: tower tip unknowns: theta, V, Omega (each 3), and the tip equilibrium rows
+            self._tip_theta = last + np.arange(9, 12)
+            self._tip_V = last + np.arange(12, 15)
+            self._tip_Om = last + np.arange(15, 18)
+            self._tip_rows = last + np.arange(6, 12)
+            self._tower_g = np.array([[-float(turbine.gravity.g), 0.0, 0.0]]) \
+                if self.gravity else None
+            self._tower_jac = ColouredJacobian(
+                block_tridiagonal_pattern(self.tower.pattern_blocks()))
         self._jac = ColouredJacobian(self.sparsity())
         self._beam_jac = ColouredJacobian(block_tridiagonal_pattern(self.beam.pattern_blocks()))
 
+    def tower_top(self, ydot, y) -> Optional[np.ndarray]:
+        """(5, 3) tower-top state [theta, V, Omega, Vdot, Omegadot] of the tower's tip node
+        (tip section frame), or None for a rigid tower."""
+        if self.tower is None:
+            return None
+        return np.stack([y[self._tip_theta], y[self._tip_V], y[self._tip_Om],
+                         ydot[self._tip_V], ydot[self._tip_Om]])
+
+    def _tower_residual(self, ydt, yt, tip_loads, batch=1):
+        """Tower beam rows (batch, n_t): clamped at the ground (root frame inertial, at rest),
+        gravity along -t1, tip loads = the rigid system's loads on the tower top."""
+        tip_loads = np.atleast_2d(tip_loads)
+        z = np.zeros((batch, 3), dtype=tip_loads.dtype)
+        g = None if self._tower_g is None else np.repeat(self._tower_g, batch, axis=0)
+        tl = np.broadcast_to(tip_loads, (batch, 6))
+        return self.tower.residual(ydt, yt, z, z, g, tl[:, :3], tl[:, 3:])
+
     # ------------------------------------------------------------------ residual
     def residual(self, ydot, y, t):
-        """R(ydot, y, t) (n,): rigid kinematics, rigid dynamics, blades. Complex-safe."""
+        """R(ydot, y, t) (n,): rigid kinematics, rigid dynamics, blades[, tower]. Complex-safe."""
+        if self.tower is not None:
+            return self._residual_tower(ydot, y, t)
         nq, nu, nr = self.nq, self.nu, self.nq + self.nu
         q, u = y[:nq], y[nq:nr]
         qd, ud = ydot[:nq], ydot[nq:nr]
@@ -159,6 +227,23 @@ class TurbineModel:
         rd = self.rigid.dynamics(q, u, ud, t, yb[:, 0:3], yb[:, 3:6])
         return np.concatenate([np.atleast_1d(rk), np.atleast_1d(rd), rb.ravel()])
 
+    def _residual_tower(self, ydot, y, t):
+        nq, nu, nr = self.nq, self.nu, self.nq + self.nu
+        nb, nbl, to = self.n_blades, self.beam.n, self.layout.tower_offset
+        q, u = y[:nq], y[nq:nr]
+        qd, ud = ydot[:nq], ydot[nq:nr]
+        yb = y[nr:to].reshape(nb, nbl)
+        ydb = ydot[nr:to].reshape(nb, nbl)
+        tw = self.tower_top(ydot, y)
+        v, w = self.rigid.root_motion(q, u, t, tw)
+        g = self.rigid.gravity_in_root(q, t, tw) if self.gravity else None
+        rb = self.beam.residual(ydb, yb, v, w, g)
+        rk = self.rigid.kinematics(q, qd, u, t)
+        gf = self.rigid.generalized_forces(q, u, ud, t, yb[:, 0:3], yb[:, 3:6], tw)
+        rt = self._tower_residual(ydot[None, to:], y[None, to:], gf[None, nu:])
+        return np.concatenate([np.atleast_1d(rk), np.atleast_1d(gf[:nu]), rb.ravel(),
+                               rt.ravel()])
+
     def sparsity(self) -> sp.csr_matrix:
         """Structural pattern of dR/dy and dR/dydot (an over-estimate at block level)."""
         nr = self.nq + self.nu
@@ -169,9 +254,17 @@ class TurbineModel:
         for k in range(self.n_blades):
             off = self.layout.blade_offset(k)
             P[:nr, off:off + 6] = True      # root loads enter the rigid dynamics
+        blocks = [sp.csr_matrix((nr, nr), dtype=bool)] + [blade] * self.n_blades
+        if self.tower is not None:
+            tip = np.concatenate([self._tip_theta, self._tip_V, self._tip_Om])
+            to = self.layout.tower_offset
+            P[:to, tip] = True                # tower-top motion: rigid rows and blade rows
+            for k in range(self.n_blades):    # blade root loads -> tower-top loads
+                off = self.layout.blade_offset(k)
+                P[self._tip_rows[:, None], off + np.arange(6)[None, :]] = True
+            blocks.append(block_tridiagonal_pattern(self.tower.pattern_blocks()))
         P = sp.csr_matrix(P)
-        P = P + sp.block_diag([sp.csr_matrix((nr, nr), dtype=bool)]
-                              + [blade] * self.n_blades, format="csr")
+        P = P + sp.block_diag(blocks, format="csr")
         return P.astype(bool)
 
     def jacobians(self, ydot, y, t):
@@ -184,6 +277,8 @@ class TurbineModel:
         """
         y = np.asarray(y, float)
         ydot = np.asarray(ydot, float)
+        if self.tower is not None:
+            return self._jacobians_tower(ydot, y, t)
         h = STEP
         nq, nu, nr, nb, nbl = self.nq, self.nu, self.nq + self.nu, self.n_blades, self.beam.n
         q, u, qd, ud = y[:nq], y[nq:nr], ydot[:nq], ydot[nq:nr]
@@ -248,6 +343,100 @@ class TurbineModel:
         Jd = sp.csc_matrix((np.concatenate(vals_d), (np.concatenate(rows_d), np.concatenate(cols_d))), shape=shape)
         return Jy, Jd
 
+    def _jacobians_tower(self, ydot, y, t):
+        """Structured Jacobians with a flexible tower: blade rows w.r.t. blade unknowns (one
+        batched call), blade rows w.r.t. the rigid unknowns and the tower-top theta, V, Omega
+        (one batched call through the root motion and gravity), tower rows w.r.t. tower
+        unknowns at fixed tip loads (one batched call), and the rigid rows plus the tower-top
+        loads (which enter the tower's tip equilibrium rows additively) w.r.t. the rigid
+        unknowns and rates, the blade root loads and the tower-top state and rates."""
+        h = STEP
+        nq, nu, nr, nb, nbl = self.nq, self.nu, self.nq + self.nu, self.n_blades, self.beam.n
+        to, nt = self.layout.tower_offset, self.tower.n
+        q, u, ud = y[:nq], y[nq:nr], ydot[nq:nr]
+        yb = y[nr:to].reshape(nb, nbl)
+        ydb = ydot[nr:to].reshape(nb, nbl)
+        yt, ydt = y[to:], ydot[to:]
+        tw = self.tower_top(ydot, y)
+        v, w = self.rigid.root_motion(q, u, t, tw)
+        g = self.rigid.gravity_in_root(q, t, tw) if self.gravity else None
+        rows_y, cols_y, vals_y = [], [], []
+        rows_d, cols_d, vals_d = [], [], []
+
+        def batched(jac, fun, yy, yyd, off, nblk, n):
+            """Block-diagonal part of nblk identical beams (fun(Yd, Y, C) -> (C*nblk, n))."""
+            C = jac.n_colours
+            seeds = np.repeat(jac.seeds, nblk, axis=0) * (1j * h)
+            Y, Yd = np.tile(yy, (C, 1)), np.tile(yyd, (C, 1))
+            for Yp, Ydp, rr, cc, vv in ((Y + seeds, Yd, rows_y, cols_y, vals_y),
+                                        (Y, Yd + seeds, rows_d, cols_d, vals_d)):
+                comp = fun(Ydp, Yp, C).imag.reshape(C, nblk, n) / h
+                for k in range(nblk):
+                    rr.append(jac._rows + off[k]), cc.append(jac._cols + off[k])
+                    vv.append(comp[jac._col_colour, k, jac._rows])
+
+        rep = lambda a, C: None if a is None else np.tile(a, (C, 1))
+        batched(self._beam_jac,
+                lambda Yd, Y, C: self.beam.residual(Yd, Y, rep(v, C), rep(w, C), rep(g, C)),
+                yb, ydb, [self.layout.blade_offset(k) for k in range(nb)], nb, nbl)
+        gf = self.rigid.generalized_forces(q, u, ud, t, yb[:, 0:3], yb[:, 3:6], tw)
+        tip = gf[nu:]
+        batched(self._tower_jac, lambda Yd, Y, C: self._tower_residual(Yd, Y, tip, C),
+                yt[None], ydt[None], [to], 1, nt)
+
+        # blade rows w.r.t. rigid q, u and the tower-top theta, V, Omega (root motion, gravity)
+        tip_cols = np.concatenate([self._tip_theta, self._tip_V, self._tip_Om])
+        xcols = np.concatenate([np.arange(nr), tip_cols])
+        x0 = np.concatenate([q, u, tw[0], tw[1], tw[2]])
+        vs, ws, gs = [], [], []
+        for j in range(len(xcols)):
+            x = x0.astype(complex)
+            x[j] += 1j * h
+            twj = np.concatenate([x[nr:].reshape(3, 3), tw[3:].astype(complex)])
+            vj, wj = self.rigid.root_motion(x[:nq], x[nq:nr], t, twj)
+            vs.append(vj), ws.append(wj)
+            gs.append(self.rigid.gravity_in_root(x[:nq], t, twj) if self.gravity else None)
+        nx = len(xcols)
+        r = self.beam.residual(np.tile(ydb, (nx, 1)), np.tile(yb, (nx, 1)).astype(complex),
+                               np.concatenate(vs), np.concatenate(ws),
+                               np.concatenate(gs) if self.gravity else None).imag / h
+        r = r.reshape(nx, nb * nbl)
+        rr, cc = np.nonzero(r.T)
+        rows_y.append(nr + rr), cols_y.append(xcols[cc]), vals_y.append(r.T[rr, cc])
+
+        # rigid rows and tower-top loads w.r.t. rigid unknowns/rates, root loads, tower top
+        out_rows = np.concatenate([np.arange(nr), self._tip_rows])
+
+        def rigid_rows(yy, yyd):
+            Fb = yy[nr:to].reshape(nb, nbl)
+            twx = np.stack([yy[self._tip_theta], yy[self._tip_V], yy[self._tip_Om],
+                            yyd[self._tip_V], yyd[self._tip_Om]])
+            rk = np.atleast_1d(self.rigid.kinematics(yy[:nq], yyd[:nq], yy[nq:nr], t))
+            return np.concatenate([rk, self.rigid.generalized_forces(
+                yy[:nq], yy[nq:nr], yyd[nq:nr], t, Fb[:, 0:3], Fb[:, 3:6], twx)])
+
+        root_cols = np.concatenate([self.layout.blade_offset(k) + np.arange(6)
+                                    for k in range(nb)]).astype(int)
+        for cols, rr_, cc_, vv_, wrt_rate in (
+                (np.concatenate([np.arange(nr), root_cols, tip_cols]), rows_y, cols_y, vals_y,
+                 False),
+                (np.concatenate([np.arange(nr), self._tip_V, self._tip_Om]), rows_d, cols_d,
+                 vals_d, True)):
+            for col in cols:
+                yy, yyd = y.astype(complex), ydot.astype(complex)
+                (yyd if wrt_rate else yy)[col] += 1j * h
+                d = rigid_rows(yy, yyd).imag / h
+                nzr = np.flatnonzero(d)
+                rr_.append(out_rows[nzr]), cc_.append(np.full(len(nzr), col)), vv_.append(d[nzr])
+        shape = (self.n, self.n)
+        Jy = sp.csc_matrix((np.concatenate(vals_y), (np.concatenate(rows_y),
+                                                     np.concatenate(cols_y))), shape=shape)
+        Jd = sp.csc_matrix((np.concatenate(vals_d), (np.concatenate(rows_d),
+                                                     np.concatenate(cols_d))), shape=shape)
+        Jy.sum_duplicates()
+        Jd.sum_duplicates()
+        return Jy, Jd
+
     def jacobians_reference(self, ydot, y, t):
         """The same Jacobians by plain coloured complex steps on the whole residual (slow;
         the reference for tests of :meth:`jacobians`)."""
@@ -270,7 +459,7 @@ class TurbineModel:
         for k in range(self.n_blades):
             off = self.layout.blade_offset(k)
             y[off:off + self.beam.n] = self.beam.rigid_body_state(np.real(v[k]), np.real(w[k]))
-        return y
+        return y  # a flexible tower starts at rest, undeformed (zeros)
 
     def is_time_invariant_at(self, y, times=None, tol=1e-9) -> bool:
         """True when ``R(0, y, t)`` stays zero over a revolution (a constant steady state)."""
@@ -314,6 +503,11 @@ class TurbineModel:
         rows, cols, vals = [], [], []
         nr = self.nq + self.nu
         rows, cols, vals = list(range(nr)), list(range(nr)), list(rigid_sign)
+        if self.tower is not None:      # the tower (inertial frame) maps to itself
+            tw = self.layout.tower_offset + np.arange(self.tower.n)
+            rows += tw.tolist()
+            cols += tw.tolist()
+            vals += [1.0] * self.tower.n
         nb = self.beam.n
         for k in range(self.n_blades):
             src = self.layout.blade_offset(k) + np.arange(nb)

@@ -69,7 +69,16 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["RigidSystem", "rot1", "rot2", "rot3"]
+__all__ = ["RigidSystem", "rot1", "rot2", "rot3", "tip_basis"]
+
+
+def tip_basis(theta) -> np.ndarray:
+    """``C(theta)^T``: columns = the deformed section basis B in the undeformed basis b, for
+    Rodrigues parameters theta (complex-safe; the transpose of the beam's C)."""
+    th = np.asarray(theta)
+    s = 0.25 * (th @ th)
+    sk = np.array([[0.0 * s, -th[2], th[1]], [th[2], 0.0 * s, -th[0]], [-th[1], th[0], 0.0 * s]])
+    return ((1 - s) * np.eye(3) + sk + 0.5 * np.outer(th, th)) / (1 + s)
 
 
 def _rotation(axis: int, a) -> np.ndarray:
@@ -133,6 +142,23 @@ class RigidSystem:
                            + self.hub_mass * (self.d * ct) ** 2)
         #: yaw inertia of the nacelle body alone (Iy minus the hub's share at qh = 0)
         self.nacelle_yaw_inertia = float(nac.yaw_inertia) - hub_yaw_inertia
+        #: True when the tower is a flexible beam: the tower-top motion (6 more generalized
+        #: speeds, values taken from the tower's tip node) enters everything
+        self.flexible_tower = turbine.tower is not None
+        self.nacelle_mass = float(getattr(nac, "mass", 0.0))
+        c = getattr(nac, "cg_offset", None)
+        #: nacelle mass centre relative to the tower-top point TY, in Y (y1 up, y2, y3 shaft)
+        self.nacelle_cg = np.zeros(3) if c is None else np.array(c, float).reshape(3)
+        i_yaw_cg = self.nacelle_yaw_inertia - self.nacelle_mass * (self.nacelle_cg[1] ** 2
+                                                                     + self.nacelle_cg[2] ** 2)
+        #: nacelle body inertia about its mass centre, Y basis (yaw, pitch about y2, roll about y3)
+        self.nacelle_inertia = np.diag([i_yaw_cg, float(getattr(nac, "inertia_pitch", 0.0)),
+                                        float(getattr(nac, "inertia_roll", 0.0))])
+        if self.flexible_tower and i_yaw_cg < 0:
+            raise ValueError(
+                "nacelle.yaw_inertia: %g kg m^2 is not allowed with this hub and nacelle mass "
+                "centre; need at least %g (hub share + nacelle mass x offset^2)"
+                % (nac.yaw_inertia, nac.yaw_inertia - i_yaw_cg))
 
         coords, speeds = [], []
         if self.yaw_free:
@@ -182,14 +208,23 @@ class RigidSystem:
         """Shaft azimuth psi = Omega0 t (blade 0 up at t = 0)."""
         return self.omega0 * t
 
-    def frames(self, q, t):
-        """Basis matrices in N (columns = unit vectors): dict Y, S, H and B (Nb, 3, 3)."""
+    def frames(self, q, t, tower=None):
+        """Basis matrices in N (columns = unit vectors): dict Y, S, H and B (Nb, 3, 3); with a
+        flexible tower also T (the tower-top section frame; Y = T rot1(qy))."""
         qy, qh = self._split(q, self.n_q)
-        Y = rot1(qy)
+        if self.flexible_tower:
+            Tt = tip_basis(self._tower_state(tower)[0])
+            Y = Tt @ rot1(qy)
+        else:
+            Tt = None
+            Y = rot1(qy)
         S = Y @ rot2(self.tilt) @ rot3(self.azimuth(t))
         H = S @ rot2(-qh)
         B = np.einsum("ij,kjl->kil", H, self.root_in_hub)
-        return {"Y": Y, "S": S, "H": H, "B": B}
+        out = {"Y": Y, "S": S, "H": H, "B": B}
+        if Tt is not None:
+            out["T"] = Tt
+        return out
 
     def _kin(self, q, u, t):
         """Velocities, partial velocities and their ingredients, all in N."""
@@ -218,19 +253,156 @@ class RigidSystem:
                     w_Y=w_Y, w_S=w_S, w_H=w_H, wr_H=wr_H, wr_S=wr_S,
                     vr_SH=vr_SH, v_SH=v_SH, vr_P=vr_P, v_P=v_P, rho=rho)
 
+    # ------------------------------------------------------------------ flexible tower
+    def _tower_state(self, tower):
+        """(5, 3) tower-top state [theta, V, Omega, Vdot, Omegadot] (zeros when None)."""
+        if tower is None:
+            return np.zeros((5, 3))
+        tw = np.asarray(tower)
+        if tw.ndim != 2 or tw.shape[1] != 3 or tw.shape[0] not in (3, 5):
+            raise ValueError(f"tower: expected shape (5, 3) (theta, V, Omega, Vdot, Omegadot "
+                             f"of the tower tip), got {tw.shape}")
+        if tw.shape[0] == 3:
+            tw = np.concatenate([tw, np.zeros((2, 3), dtype=tw.dtype)])
+        return tw
+
+    def _check_tower(self, tower):
+        if tower is not None and not self.flexible_tower:
+            raise ValueError("tower: this rigid system has a rigid tower; pass tower=None")
+
+    def _kin_tower(self, q, u, t, tower):
+        """Flexible-tower kinematics in N: velocities and partial velocities for the speeds
+        z = (U1, U2, V_1..3, Omega_1..3) (removed DOFs included, with zero partials)."""
+        qy, qh = self._split(q, self.n_q)
+        U1, U2 = self._split(u, self.n_u)
+        tw = self._tower_state(tower)
+        fr = self.frames(q, t, tw)
+        Tt, Y, S, H = fr["T"], fr["Y"], fr["S"], fr["H"]
+        y1, s3, h2 = Y[:, 0], S[:, 2], H[:, 1]
+        w_T = Tt @ tw[2]
+        v_T = Tt @ tw[1]
+        w_Y = w_T + U1 * y1
+        y1h2 = y1 @ h2
+        z = 0.0 * h2
+        if self.teeter:
+            wr1, wr2 = y1 - y1h2 * h2, h2
+        else:
+            wr1, wr2 = y1, z
+        w_H = w_T + wr1 * U1 + wr2 * U2 + self.omega0 * s3
+        r_SH = self.d * s3
+        r_c = Y @ self.nacelle_cg
+        v_SH = v_T + np.cross(w_Y, r_SH)
+        rho = self.root_offset_hub @ H.T                       # (Nb, 3) in N
+        v_P = v_SH[None, :] + np.cross(w_H[None, :], rho)
+        b = [Tt[:, j] for j in range(3)]                       # tower-top basis in N
+        wr_Y = np.array([y1, z, z, z, z] + b)
+        wr_H = np.array([wr1, wr2, z, z, z] + b)
+        wr_S = np.array([y1, z, z, z, z] + b)
+        vr_SH = np.array([np.cross(y1, r_SH), z] + b + [np.cross(bj, r_SH) for bj in b])
+        vr_c = np.array([np.cross(y1, r_c), z] + b + [np.cross(bj, r_c) for bj in b])
+        vr_P = vr_SH[:, None, :] + np.cross(wr_H[:, None, :], rho[None, :, :])   # (8, Nb, 3)
+        return dict(qy=qy, qh=qh, U1=U1, U2=U2, fr=fr, tw=tw, Tt=Tt, y1=y1, s3=s3, h2=h2,
+                    y1h2=y1h2, w_T=w_T, v_T=v_T, w_Y=w_Y, w_H=w_H, wr1=wr1, wr2=wr2,
+                    r_SH=r_SH, r_c=r_c, v_SH=v_SH, v_P=v_P, rho=rho, wr_Y=wr_Y, wr_H=wr_H,
+                    wr_S=wr_S, vr_SH=vr_SH, vr_c=vr_c, vr_P=vr_P)
+
+    def _kane_tower(self, q, u, udot, t, Fb, Mb, tower):
+        """Kane's F_r + F_r* for z = (U1, U2, V_1..3, Omega_1..3) with a flexible tower."""
+        k = self._kin_tower(q, u, t, tower)
+        Ud1, Ud2 = self._split(udot, self.n_u)
+        U1, U2, qy, qh = k["U1"], k["U2"], k["qy"], k["qh"]
+        tw, Tt = k["tw"], k["Tt"]
+        y1, s3, h2 = k["y1"], k["s3"], k["h2"]
+        w_T, v_T, w_Y, w_H = k["w_T"], k["v_T"], k["w_Y"], k["w_H"]
+        Y, H, B = k["fr"]["Y"], k["fr"]["H"], k["fr"]["B"]
+        # --- accelerations (tower top: a_T = T (Vdot + Omega x V), alpha_T = T Omegadot)
+        alpha_T = Tt @ tw[4]
+        a_T = Tt @ tw[3] + np.cross(w_T, v_T)
+        y1dot = np.cross(w_T, y1)
+        alpha_Y = alpha_T + Ud1 * y1 + U1 * y1dot
+        s3dot = np.cross(w_Y, s3)
+        h2dot = np.cross(w_H, h2)
+        if self.teeter:
+            wr1dot = y1dot - ((y1dot @ h2 + y1 @ h2dot) * h2 + k["y1h2"] * h2dot)
+            wr2dot = h2dot
+        else:
+            wr1dot = y1dot
+            wr2dot = 0.0 * h2
+        alpha_H = (alpha_T + k["wr1"] * Ud1 + k["wr2"] * Ud2 + wr1dot * U1 + wr2dot * U2
+                   + self.omega0 * s3dot)
+        r_SH, r_c = k["r_SH"], k["r_c"]
+        a_SH = a_T + np.cross(alpha_Y, r_SH) + np.cross(w_Y, np.cross(w_Y, r_SH))
+        a_c = a_T + np.cross(alpha_Y, r_c) + np.cross(w_Y, np.cross(w_Y, r_c))
+        # --- generalized inertia forces (hub at SH, nacelle at its mass centre)
+        I_H = H @ self.hub_inertia @ H.T
+        I_Y = Y @ self.nacelle_inertia @ Y.T
+        T_H = -(I_H @ alpha_H + np.cross(w_H, I_H @ w_H))
+        T_Y = -(I_Y @ alpha_Y + np.cross(w_Y, I_Y @ w_Y))
+        Fstar = (k["wr_H"] @ T_H + k["vr_SH"] @ (-self.hub_mass * a_SH)
+                 + k["wr_Y"] @ T_Y + k["vr_c"] @ (-self.nacelle_mass * a_c))
+        # --- generalized active forces
+        F_N = np.einsum("kij,kj->ki", B, Fb)
+        M_N = np.einsum("kij,kj->ki", B, Mb)
+        gN = np.array([-self.g, 0.0, 0.0])
+        F = np.einsum("rki,ki->r", k["vr_P"], F_N) + k["wr_H"] @ M_N.sum(axis=0)
+        F = F + k["vr_SH"] @ (self.hub_mass * gN) + k["vr_c"] @ (self.nacelle_mass * gN)
+        # yaw spring/damper between Y and the tower top: works only through U1
+        yaw_t = -self.k_yaw * qy - self.c_yaw * U1
+        F = F + np.concatenate([[yaw_t], [0.0 * U1], np.zeros(6)])
+        if self.teeter:
+            qhdot = U1 * k["y1h2"] - U2
+            tau = (self.k_teeter * qh + self.c_teeter * qhdot) * h2   # on H, reaction on S
+            F = F + (k["wr_H"] - k["wr_S"]) @ tau
+        res = F + Fstar
+        return np.concatenate([self._join(res[0], res[1]), res[2:]])
+
+    def generalized_forces(self, q, u, udot, t, root_force, root_moment, tower=None):
+        """Kane's ``F_r + F_r*`` for every generalized speed: (n_u,) without a flexible tower
+        (= :meth:`dynamics`), (n_u + 6,) with one: the rows of the active speeds, then those of
+        the tower-top speeds V_tip, Omega_tip, which are the force and the moment (about the
+        tower-top point) that the rigid system exerts ON the tower top, in the tower-top
+        section frame B.  ``tower``: (5, 3) [theta, V, Omega, Vdot, Omegadot] of the tower's
+        tip node (B components; None = at rest, undeformed)."""
+        if not self.flexible_tower:
+            self._check_tower(tower)
+            return self.dynamics(q, u, udot, t, root_force, root_moment)
+        Fb = np.asarray(root_force)
+        Mb = np.asarray(root_moment)
+        nb = self.n_blades
+        if Fb.shape != (nb, 3) or Mb.shape != (nb, 3):
+            raise ValueError(f"root loads must have shape ({nb}, 3)")
+        return self._kane_tower(q, u, udot, t, Fb, Mb, tower)
+
+    def tower_top_loads(self, q, u, udot, t, root_force, root_moment, tower=None):
+        """(force (3,), moment (3,)) exerted by the rigid system (with the blade root loads)
+        on the tower top, tower-top section frame B; the moment is about the tower-top point."""
+        if not self.flexible_tower:
+            raise ValueError("tower: this turbine has a rigid tower")
+        r = self.generalized_forces(q, u, udot, t, root_force, root_moment, tower)
+        return r[self.n_u:self.n_u + 3], r[self.n_u + 3:]
+
     # ------------------------------------------------------------------ public API
-    def root_motion(self, q, u, t):
+    def root_motion(self, q, u, t, tower=None):
         """(v, w), arrays (Nb, 3): inertial velocity of each blade-root point and inertial
-        angular velocity of the hub (= root frame), each in that blade's root basis b."""
+        angular velocity of the hub (= root frame), each in that blade's root basis b.
+        ``tower``: the tower-top state (flexible tower only, see generalized_forces)."""
+        if self.flexible_tower:
+            k = self._kin_tower(q, u, t, tower)
+            B = k["fr"]["B"]
+            v = np.einsum("kji,kj->ki", B, k["v_P"])
+            w = np.einsum("kji,j->ki", B, k["w_H"])
+            return v, w
+        self._check_tower(tower)
         k = self._kin(q, u, t)
         B = k["fr"]["B"]
         v = np.einsum("kji,kj->ki", B, k["v_P"])
         w = np.einsum("kji,j->ki", B, k["w_H"])
         return v, w
 
-    def gravity_in_root(self, q, t):
+    def gravity_in_root(self, q, t, tower=None):
         """(Nb, 3): the gravity vector ``-g n1`` [m/s^2] in each blade's root basis b."""
-        B = self.frames(q, t)["B"]
+        self._check_tower(tower)
+        B = self.frames(q, t, tower)["B"]
         gN = np.array([-self.g, 0.0, 0.0])
         return np.einsum("kji,j->ki", B, gN)
 
@@ -251,12 +423,17 @@ class RigidSystem:
             raise ValueError(f"expected qdot shape ({self.n_q},), got {qd.shape}")
         return qd - self.qdot(q, u, t)
 
-    def dynamics(self, q, u, udot, t, root_force, root_moment):
+    def dynamics(self, q, u, udot, t, root_force, root_moment, tower=None):
         """Kane's dynamical equations ``F_r + F_r* = 0``, residual (n_u,).
 
         ``root_force``, ``root_moment``: (Nb, 3) loads exerted BY the blades ON the hub at
-        the root points, each in that blade's root basis b.
+        the root points, each in that blade's root basis b.  ``tower``: tower-top state
+        (flexible tower only; see generalized_forces, which also gives the tower-top loads).
         """
+        if self.flexible_tower:
+            return self.generalized_forces(q, u, udot, t, root_force, root_moment,
+                                           tower)[:self.n_u]
+        self._check_tower(tower)
         k = self._kin(q, u, t)
         Ud1, Ud2 = self._split(udot, self.n_u)
         U1, U2 = k["U1"], k["U2"]
