@@ -132,15 +132,29 @@ class _ModeGeometry:
         self.nodes = np.asarray(model.beam.props.nodes, float)      # (N+1,) span from root
         self.coords = [c for c in self.rigid.coordinates]
         self.R = float(model.turbine.hub.radius + model.turbine.blade.length)
+        self.tower = None
+        if getattr(self.rigid, "flexible_tower", False):
+            try:
+                self.tower = self.lay.tower()       # tower-top motion moves the whole rotor
+            except (AttributeError, ValueError):
+                self.tower = None
 
-    def points(self, q, u, t):
+    def points(self, q, u, t, tower=None):
         """(Nb, N+1, 3) blade axis points and (3,) teeter-axis point, shaft-frame coordinates;
-        ``q`` rigid coordinates (n_q,), ``u`` (Nb, N+1, 3) blade displacements (root frame)."""
+        ``q`` rigid coordinates (n_q,), ``u`` (Nb, N+1, 3) blade displacements (root frame);
+        ``tower``: None or the tower-top (u, theta) (2, 3) in the inertial frame."""
         rg = self.rigid
-        fr = rg.frames(np.asarray(q, float), t)
+        if tower is not None:
+            state = np.zeros((5, 3))
+            state[0] = np.asarray(tower)[1]              # tower-top rotation (Rodrigues)
+            fr = rg.frames(np.asarray(q, float), t, tower=state)
+            top = np.asarray(tower)[0]
+        else:
+            fr = rg.frames(np.asarray(q, float), t)
+            top = np.zeros(3)
         S0 = rg.frames(np.zeros(rg.n_q), t)["S"]
         H, B, S = fr["H"], fr["B"], fr["S"]
-        hub = rg.d * S[:, 2]
+        hub = top + rg.d * S[:, 2]
         pts = np.empty((self.nb, len(self.nodes), 3))
         for k in range(self.nb):
             root = hub + H @ rg.root_offset_hub[k]
@@ -165,16 +179,21 @@ class _ModeGeometry:
             b = self.lay.blade(k)
             u[k, 1:] = x[b.u[1:]]
             th[k, 1:] = x[b.theta[1:]]
-        return q, u, th
+        tw = None
+        if self.tower is not None:
+            tw = np.array([x[self.tower.u[-1]], x[self.tower.theta[-1]]], float)
+        return q, u, th, tw
 
     def displacement(self, x, t):
         """Linearized displacement of the blade axes (Nb, N+1, 3), of the hub (3,), and the
         twist theta1 (Nb, N+1) for the real perturbation ``x`` at time t."""
-        q, u, th = self.split(x)
-        size = max(np.abs(q).max(initial=0.0) * self.R, np.abs(u).max(initial=0.0), 1e-300)
+        q, u, th, tw = self.split(x)
+        size = max(np.abs(q).max(initial=0.0) * self.R, np.abs(u).max(initial=0.0),
+                   0.0 if tw is None else np.abs(tw[0]).max() + self.R * np.abs(tw[1]).max(),
+                   1e-300)
         eps = 1e-6 / size                        # a perturbation of ~1 micrometre
         P0, h0 = self.points(np.zeros_like(q), np.zeros_like(u), t)
-        P1, h1 = self.points(eps * q, eps * u, t)
+        P1, h1 = self.points(eps * q, eps * u, t, None if tw is None else eps * tw)
         return (P1 - P0) / eps, (h1 - h0) / eps, th[:, :, 0]
 
 
@@ -259,7 +278,8 @@ def _draw_mode(axes, result, mode, instants=MODE_INSTANTS):
         ax.set_aspect("equal", adjustable="box")
         ax.set_ylim(-1.1 * R, 1.1 * R)
         ax.grid(True, alpha=0.25)
-    axes[0].set_xlim(-0.45 * R, 0.45 * R)
+    half = 0.45 * R if geom.nb == 2 else 1.1 * R          # blades off the vertical: wider
+    axes[0].set_xlim(-half, half)
     axes[0].set_title("rotor plane (looking upwind), rotating with the rotor", fontsize=9)
     axes[0].set_xlabel("lateral $s_2$ [m]")
     axes[0].set_ylabel("blade 1 span $s_1$ [m]")
