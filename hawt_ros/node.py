@@ -20,10 +20,13 @@ docs/ros.md.
 from __future__ import annotations
 
 import math
+import os
+import shutil
 import signal
 import sys
 import threading
 import time
+from collections import deque
 from pathlib import Path
 from typing import Dict, List, Optional
 
@@ -65,10 +68,32 @@ STATE_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE,
 #: simulation timer and quick requests always find a free thread.
 EXECUTOR_THREADS = 10
 MAX_BLOCKED = 6
+#: The live status line (parameter ``status``): refreshed in place every STATUS_TTY_PERIOD s
+#: on a terminal, else one plain line every STATUS_PLAIN_PERIOD s.
+STATUS_PARAM = "status"
+STATUS_TTY_PERIOD = 0.5
+STATUS_PLAIN_PERIOD = 5.0
+STATUS_DOC = ("live status line on stderr (sim time, real-time factor, teeter, yaw, blade-0 tip "
+              "deflection, recording, analyses); default true when stderr is a terminal")
 
 
 class StartupError(RuntimeError):
     """The node cannot start (bad parameter, unreadable turbine file, ...)."""
+
+
+def _stderr_is_tty() -> bool:
+    try:
+        return bool(sys.stderr.isatty())
+    except (AttributeError, ValueError, OSError):
+        return False
+
+
+def _validate_status(value):
+    """The ``status`` parameter: a bool (ParameterError otherwise)."""
+    if isinstance(value, bool):
+        return value
+    raise ParameterError(STATUS_PARAM, value, "need true or false (default: true when stderr "
+                                              "is a terminal)")
 
 
 def _time_msg(ns: int) -> TimeMsg:
@@ -98,6 +123,11 @@ class HawtNode(Node):
         self._blocked = 0
         self._blocked_lock = threading.Lock()
         self._goal_jobs: Dict[bytes, Job] = {}
+        self.analyses_served = 0              # successful service/action answers
+        # last published instant for the status line: (monotonic, sim t, yaw, teeter,
+        # blade-0 tip flap, blade-0 tip lead-lag) [s, s, rad, rad, m, m]; replaced whole
+        self.last_state: Optional[tuple] = None
+        self.status_enabled = False
 
         # ---------------------------------------------------------------- parameters
         values = {}
@@ -111,6 +141,12 @@ class HawtNode(Node):
         except ParameterError as exc:
             raise StartupError(f"parameter {exc}") from None
         self.settings = NodeSettings(**kw)
+        self.declare_parameter(STATUS_PARAM, _stderr_is_tty(),
+                               ParameterDescriptor(description=STATUS_DOC, dynamic_typing=True))
+        try:
+            self.status_enabled = _validate_status(self.get_parameter(STATUS_PARAM).value)
+        except ParameterError as exc:
+            raise StartupError(f"parameter {exc}") from None
         self._warn_unknown_overrides()
 
         # ---------------------------------------------------------------- model
@@ -216,7 +252,8 @@ class HawtNode(Node):
 
     def _warn_unknown_overrides(self) -> None:
         overrides = getattr(self, "_parameter_overrides", {}) or {}
-        known = set(PARAMETERS) | {"use_sim_time", "start_type_description_service"}
+        known = set(PARAMETERS) | {STATUS_PARAM, "use_sim_time",
+                                   "start_type_description_service"}
         unknown = sorted(n for n in overrides if n not in known and not n.startswith("qos_overrides"))
         if unknown:
             self.get_logger().warning(
@@ -451,6 +488,8 @@ class HawtNode(Node):
         self._last_stamp_ns = stamp_ns
         self._last_pub_t = t
         self.published += 1
+        self.last_state = (time.monotonic(), t, yaw, teeter, float(disp[0, -1, 2]),
+                           float(disp[0, -1, 1]))
         return True
 
     def _rigid_state(self, named):
@@ -477,7 +516,14 @@ class HawtNode(Node):
     # ================================================================== parameters
     def _on_set_parameters(self, params: List[Parameter]) -> SetParametersResult:
         changes = {}
+        status = None
         for p in params:
+            if p.name == STATUS_PARAM:
+                try:
+                    status = _validate_status(p.value)
+                except ParameterError as exc:
+                    return SetParametersResult(successful=False, reason=str(exc))
+                continue
             if p.name not in PARAMETERS:
                 continue                                  # use_sim_time etc.: rclpy's business
             try:
@@ -501,6 +547,9 @@ class HawtNode(Node):
                     reason=f"real_time_factor: {new!r} needs a restart of the node: switching "
                            f"between 0 (simulation-time stamps, /clock) and > 0 (wall-clock "
                            f"stamps) would make time jump; current value {old!r}")
+        if status is not None and status != self.status_enabled:
+            self.status_enabled = status
+            self.get_logger().info(f"parameters changed: status={status!r}")
         if not changes:
             return SetParametersResult(successful=True)
         with self._lock:
@@ -604,6 +653,15 @@ class HawtNode(Node):
             out.compute_time = float(job.wall_time)
         return out
 
+    def _count_served(self) -> None:
+        with self._blocked_lock:
+            self.analyses_served += 1
+
+    @property
+    def analyses_waiting(self) -> int:
+        """Service/action callbacks waiting for an analysis right now."""
+        return self._blocked
+
     def _enter_blocking(self) -> bool:
         with self._blocked_lock:
             if self._blocked >= MAX_BLOCKED:
@@ -635,6 +693,8 @@ class HawtNode(Node):
             finally:
                 self._leave_blocking()
         self._fill(response, job, req)
+        if response.success:
+            self._count_served()
         self.get_logger().info(f"modal_analysis service: {response.message} "
                                f"({time.monotonic() - t0:.2f} s)")
         return response
@@ -695,6 +755,7 @@ class HawtNode(Node):
             goal_handle.canceled()
         elif job.status == "ok":
             goal_handle.succeed()
+            self._count_served()
         else:
             goal_handle.abort()
         self.get_logger().info(f"modal_analysis action: {result.message}")
@@ -713,6 +774,169 @@ class HawtNode(Node):
             self._stop_recording()
 
 
+# ====================================================================== status line
+def _num(x, fmt: str, missing: str = "--") -> str:
+    """``format(x, fmt)``, or ``missing`` when x is None or not finite (never 'nan')."""
+    try:
+        x = float(x)
+    except (TypeError, ValueError):
+        return missing
+    if not math.isfinite(x):
+        return missing
+    text = format(x, fmt)
+    return format(0.0, fmt) if float(text) == 0 else text   # no '-0.0'
+
+
+class StatusLine:
+    """The node's live status on stderr (parameter ``status``), e.g.
+
+    ``hawt | t 12.35 s | rtf 1.00 | teeter +0.42 deg | yaw +0.00 deg | tip flap +41.3 mm,
+    lag -2.1 mm | rec hawt-20261124-010203.mcap 1024 msgs | analyses 1``
+
+    A daemon thread samples the node every STATUS_TTY_PERIOD s; on a terminal it redraws the
+    line in place (``\\r``, cleared to the end of the line, cut to the terminal width), else it
+    writes a plain line every STATUS_PLAIN_PERIOD s. The real-time factor is simulation time
+    advanced / wall time elapsed over the last ~2 s (terminal) or the last period (plain).
+    It only reads attributes the node replaces whole (no lock), and a write that fails or
+    blocks never holds up the node: :meth:`close` waits at most ``timeout`` s for the thread.
+    """
+
+    def __init__(self, node: "HawtNode", stream=None, tty: Optional[bool] = None):
+        self.node = node
+        self.stream = stream if stream is not None else sys.stderr
+        if tty is None:
+            try:
+                tty = bool(self.stream.isatty())
+            except (AttributeError, ValueError, OSError):
+                tty = False
+        self.tty = tty
+        self.period = STATUS_TTY_PERIOD if tty else STATUS_PLAIN_PERIOD
+        self.window = 2.0 if tty else STATUS_PLAIN_PERIOD
+        self._samples: deque = deque()          # (monotonic, sim t) of published instants
+        self._pending = False                   # a redrawn line without its newline
+        self._broken = False
+        self._stop = threading.Event()
+        self._write_lock = threading.Lock()
+        self._thread: Optional[threading.Thread] = None
+
+    # ------------------------------------------------------------------ content
+    def _sample(self) -> None:
+        st = self.node.last_state
+        if st is None:
+            return
+        mono, t = st[0], st[1]
+        if not self._samples or mono > self._samples[-1][0]:
+            self._samples.append((mono, t))
+        horizon = time.monotonic() - self.window - self.period
+        while len(self._samples) > 2 and self._samples[1][0] < horizon:
+            self._samples.popleft()
+
+    def real_time_factor(self) -> Optional[float]:
+        """Simulation time / wall time over the sampled window (None before two samples)."""
+        if len(self._samples) < 2:
+            return None
+        (m0, t0), (m1, t1) = self._samples[0], self._samples[-1]
+        if m1 - m0 < 0.2:
+            return None
+        return (t1 - t0) / (m1 - m0)
+
+    def line(self) -> str:
+        node = self.node
+        st = node.last_state
+        parts = ["hawt"]
+        if st is None:
+            parts.append("t -- s (starting)")
+        else:
+            _, t, yaw, teeter, flap, lag = st
+            parts += [f"t {_num(t, '.2f')} s",
+                      f"rtf {_num(self.real_time_factor(), '.2f')}",
+                      f"teeter {_num(math.degrees(teeter), '+.2f')} deg",
+                      f"yaw {_num(math.degrees(_wrap_pi(yaw)), '+.2f')} deg",
+                      f"tip flap {_num(flap * 1e3, '+.1f')} mm, lag {_num(lag * 1e3, '+.1f')} mm"]
+        rec = node.recorder
+        if rec is not None:
+            parts.append(f"rec {Path(node.record_path).name} {rec.message_count} msgs")
+        else:
+            parts.append("rec off")
+        waiting = node.analyses_waiting
+        parts.append(f"analyses {node.analyses_served}" + (f" (+{waiting} running)"
+                                                          if waiting else ""))
+        if node._failed:
+            parts.append("SIMULATION STOPPED")
+        return " | ".join(parts)
+
+    # ------------------------------------------------------------------ output
+    def _write(self, text: str) -> None:
+        if self._broken:
+            return
+        try:
+            with self._write_lock:
+                self.stream.write(text)
+                self.stream.flush()
+        except (OSError, ValueError):           # closed or broken stderr: stop quietly
+            self._broken = True
+
+    def show(self) -> None:
+        """Write the status once (redraw in place on a terminal)."""
+        text = self.line()
+        if self.tty:
+            width = shutil.get_terminal_size((120, 24)).columns - 1
+            if width > 10 and len(text) > width:
+                text = text[:width - 1] + "~"
+            self._write("\r\x1b[K" + text)
+            self._pending = True
+        else:
+            self._write(text + "\n")
+
+    def end_line(self) -> None:
+        """Terminate a redrawn line (before other output, at the end)."""
+        if self._pending:
+            self._pending = False
+            self._write("\n")
+
+    def _run(self) -> None:
+        next_show = time.monotonic() + (self.period if not self.tty else 0.0)
+        while not self._stop.wait(STATUS_TTY_PERIOD):
+            try:
+                self._sample()
+                if not self.node.status_enabled:
+                    self.end_line()
+                    continue
+                now = time.monotonic()
+                if now >= next_show:
+                    next_show = now + self.period - 0.05
+                    self.show()
+            except Exception:  # noqa: BLE001 - the status line never takes the node down
+                pass
+
+    def start(self) -> "StatusLine":
+        self._thread = threading.Thread(target=self._run, name="hawt-status", daemon=True)
+        self._thread.start()
+        return self
+
+    def close(self, timeout: float = 1.0) -> None:
+        """Stop the thread; on a terminal keep the last line visible (final redraw + newline)."""
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout)
+        if self._pending and self.node.status_enabled and not self._broken:
+            try:
+                self._sample()
+                self.show()
+            except Exception:  # noqa: BLE001
+                pass
+        self.end_line()
+
+
+def _log_format_for_tty() -> None:
+    """On a terminal, start every rcutils log line with 'carriage return, clear line' so a log
+    message replaces the status line being redrawn instead of being appended to it (the next
+    redraw then starts on a fresh line). Only when the user has not chosen a format."""
+    if _stderr_is_tty() and "RCUTILS_CONSOLE_OUTPUT_FORMAT" not in os.environ:
+        os.environ["RCUTILS_CONSOLE_OUTPUT_FORMAT"] = \
+            "\r\x1b[K[{severity}] [{time}] [{name}]: {message}"
+
+
 # ====================================================================== entry point
 USAGE = """usage: hawt-node [-h] [--ros-args -p NAME:=VALUE ...]
 
@@ -727,11 +951,17 @@ def _usage() -> str:
     for name, (default, doc) in PARAMETERS.items():
         flag = "" if name in RUNTIME_CHANGEABLE else " [restart to change]"
         lines.append(f"  {name} (default {default!r}){flag}\n      {doc}")
+    lines.append(f"  {STATUS_PARAM} (default: {_stderr_is_tty()!r} here)\n      {STATUS_DOC}; "
+                 f"redrawn every {STATUS_TTY_PERIOD:g} s on a terminal, else a line every "
+                 f"{STATUS_PLAIN_PERIOD:g} s")
     return "\n".join(lines) + "\n"
 
 
 def main(argv: Optional[List[str]] = None) -> int:
     args = list(sys.argv if argv is None else argv)
+    # before anything calls into rcl/rcutils (remove_ros_args does): rcutils reads its log
+    # format once, at its first use
+    _log_format_for_tty()
     from rclpy.utilities import remove_ros_args
 
     rest = remove_ros_args(args)[1:]
@@ -758,6 +988,7 @@ def main(argv: Optional[List[str]] = None) -> int:
     old = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
     node = None
     executor = None
+    status = None
     code = 0
     try:
         try:
@@ -778,11 +1009,15 @@ def main(argv: Optional[List[str]] = None) -> int:
 
         spinner = threading.Thread(target=spin, name="hawt-executor", daemon=True)
         spinner.start()
+        status = StatusLine(node).start()
         while not stop.wait(0.5):
             pass
+        status.close()
         if received:
             node.get_logger().info(f"signal {signal.Signals(received[0]).name}: shutting down")
     finally:
+        if status is not None:
+            status.close()
         if node is not None:
             node.shutdown()
         if executor is not None:
