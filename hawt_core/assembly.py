@@ -6,9 +6,15 @@ kinematics give; the root section loads ``F0, M0`` of each blade (unknowns of th
 equations, the loads the blade exerts on the hub) enter Kane's dynamical equations of the
 rigid bodies.
 
-Unknowns: ``[q (rigid coordinates), u (rigid generalized speeds), blade 0, ..., blade Nb-1]``
-where each blade block is BeamElements' layout (see fem/beam.py). Rows: ``[rigid kinematics,
-rigid dynamics, blade 0 rows, ...]``. ``StateLayout`` gives names to all of it.
+Unknowns: ``[q (rigid coordinates), u (rigid generalized speeds), blade 0, ..., blade Nb-1
+(, tower)]`` where each blade (and the tower) block is BeamElements' layout (see
+fem/beam.py). Rows: ``[rigid kinematics, rigid dynamics, blade 0 rows, ... (, tower rows)]``.
+``StateLayout`` gives names to all of it.
+
+Flexible tower: a beam clamped at the ground (inertial root frame, t1 up); its tip node's
+theta, V, Omega are the tower-top coordinates and speeds of the rigid system (they move the
+yaw bearing, hence the blade roots), and the rigid system's Kane rows for those speeds (the
+loads it exerts on the tower top) are the tower's tip loads (docs/rigid-bodies.md).
 """
 from __future__ import annotations
 

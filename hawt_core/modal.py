@@ -19,7 +19,9 @@ Labels: ``family`` is yaw or teeter when the rigid-body rotation moves the blade
 than the elastic deflection does, otherwise the strain-energy-dominant direction (flap, lag,
 torsion, axial, shear); ``symmetry`` compares the blades in their own frames (symmetric /
 antisymmetric for two blades; collective / cyclic / differential for more); ``index``
-counts within (family, symmetry) by frequency.
+counts within (family, symmetry) by frequency.  With a flexible tower, ``family`` is tower
+when the tower's elastic motion dominates, and ``symmetry`` is then its direction
+(fore-aft, side-side, torsion, axial).
 """
 from __future__ import annotations
 
@@ -206,7 +208,30 @@ def _display_rows(model: TurbineModel):
         u, th = b.u[1:].ravel(), b.theta[1:].ravel()
         idx += u.tolist() + th.tolist()
         wts += [1.0] * len(u) + [L] * len(th)
+    if lay.has_tower:   # tower displacements [m] and rotations (rotor radius: tip metres)
+        tl = lay.tower()
+        u, th = tl.u[1:].ravel(), tl.theta[1:].ravel()
+        idx += u.tolist() + th.tolist()
+        wts += [1.0] * len(u) + [R] * len(th)
     return np.array(idx), np.array(wts)
+
+
+#: ``symmetry`` of a tower mode: the dominant tower-top motion
+TOWER_DIRECTIONS = ("axial", "side-side", "fore-aft", "torsion")
+
+
+def _tower_motion(model: TurbineModel, x):
+    """Elastic tower motion of eigenvector x as metres: (largest, direction).
+
+    Largest nodal displacement components (t1 axial, t2 side-side, t3 fore-aft) [m] and the
+    largest torsion (rotation about t1) times the rotor radius (the rotor-tip metres it
+    causes); bending rotations are counted through the displacements they come with."""
+    tl = model.layout.tower()
+    R = model.turbine.hub.radius + model.turbine.blade.length
+    u = np.abs(x[tl.u[1:]]).max(axis=0)
+    parts = np.array([u[0], u[1], u[2], R * np.abs(x[tl.theta[1:, 0]]).max()])
+    j = int(np.argmax(parts))
+    return float(parts[j]), TOWER_DIRECTIONS[j]
 
 
 def _averaged_modes(dae: LinearPeriodicDAE, rows, weights, omega):
@@ -256,13 +281,23 @@ def label_modes(model: TurbineModel, fl, columns) -> list:
             off = lay.blade_offset(k)
             energy += classify_energy(model.beam, x[off:off + model.beam.n])
             bvecs.append(np.concatenate([u.ravel(), model.turbine.blade.length * th.ravel()]))
+        tower, tower_dir = _tower_motion(model, x) if lay.has_tower else (0.0, None)
         rig_name = None
-        if rigid and max(rigid.values()) >= 3.0 * elastic:
+        if tower > 0 and tower >= max([elastic] + [0.25 * r for r in rigid.values()]):
+            # the tower's elastic motion dominates: a tower mode (symmetry = direction). A
+            # tower torsion under a free yaw bearing turns the yaw angle (relative to the
+            # tower top) as much as the tower twists, and tower bending swings a free yaw and
+            # the teeter (gyroscopic coupling), all counted in blade-tip metres: hence the
+            # factor 0.25 on the rigid rotations (a heuristic, like the 3.0 below)
+            rig_name = "tower"
+        elif rigid and max(rigid.values()) >= 3.0 * elastic:
             # the free yaw angle alone is the rigid-body yaw mode; any rigid mode in which the
             # hub teeters appreciably is a teeter mode (the paper's labels)
             rig_name = "teeter" if rigid.get("teeter", 0.0) >= 0.25 * rigid.get("yaw", 0.0) \
                 else "yaw"
-        if rig_name is not None:
+        if rig_name == "tower":
+            family, symmetry, phase = "tower", tower_dir, None
+        elif rig_name is not None:
             family, symmetry, phase = rig_name, None, None
         else:
             family = FAMILIES[int(np.argmax(energy))]
@@ -277,6 +312,7 @@ def label_modes(model: TurbineModel, fl, columns) -> list:
                           damping_ratio=float(-eta.real / abs(eta)) if abs(eta) > 1e-6 * w0 else 0.0,
                           blade_phase_deg=phase,
                           participation={**{k: float(v) for k, v in rigid.items()},
+                                         **({"tower": tower} if lay.has_tower else {}),
                                          "elastic": float(elastic),
                                          **{f: float(e) for f, e in zip(
                                              ("axial", "shear2", "shear3", "torsion", "flap", "lag"),
@@ -292,13 +328,22 @@ def _family_exponent(model: TurbineModel, fl, i: int, family: str) -> complex:
     frequency closest to zero)."""
     lay = model.layout
     pos = {int(r): j for j, r in enumerate(fl.sample_rows)}
+    wts = None
     if family in ("yaw", "teeter"):
         rows = [pos[lay[family]]] if lay[family] in pos else []
+    elif family == "tower":
+        tl = lay.tower()
+        R = model.turbine.hub.radius + model.turbine.blade.length
+        sel = [(int(r), 1.0) for r in tl.u[-1]] + [(int(r), R) for r in tl.theta[-1]]
+        rows = [pos[r] for r, _ in sel if r in pos]
+        wts = np.array([w for r, w in sel if r in pos])
     else:
         return complex(fl.exponents[i])
     if not rows:
         return complex(fl.exponents[i])
     P = fl.periodic_samples[:, rows, i]
+    if wts is not None:
+        P = P * wts[None, :]
     M = P.shape[0]
     energy = (np.abs(np.fft.fft(P, axis=0) / M) ** 2).sum(1)
     k = np.fft.fftfreq(M, 1.0 / M).astype(int)

@@ -148,6 +148,12 @@ class Nacelle:
     blades, hub included (so the nacelle body alone carries Iy - Ihlat);
     ``yaw_to_teeter`` (d) [m] is the distance from the yaw axis to the teeter axis along the
     shaft; ``shaft_tilt`` [rad]; ``yaw_free`` False locks the yaw bearing; ``mass`` [kg].
+
+    Only with a flexible tower (or gravity on a moving tower top) do these matter:
+    ``cg_offset`` (x1, x2, x3) [m] of the nacelle mass centre from the tower-top point TY in
+    the nacelle frame Y (y1 up, y2 lateral, y3 along the untilted shaft, downwind);
+    ``inertia_pitch`` (about y2, nodding) and ``inertia_roll`` (about y3) [kg m^2] of the
+    nacelle body about its mass centre (its yaw inertia follows from ``yaw_inertia``).
     """
 
     yaw_inertia: float = 16599.0
@@ -157,6 +163,9 @@ class Nacelle:
     shaft_tilt: float = 0.0
     yaw_free: bool = True
     mass: float = 0.0
+    cg_offset: tuple = (0.0, 0.0, 0.0)
+    inertia_pitch: float = 0.0
+    inertia_roll: float = 0.0
 
 
 @dataclass(frozen=True)

@@ -10,7 +10,7 @@ import pytest
 
 from hawt_core.assembly import TurbineModel
 from hawt_core.io import load_turbine
-from hawt_core.model import Gravity
+from hawt_core.model import Beam, Gravity, SectionTable
 
 
 def _random_state(m, seed=3):
@@ -26,13 +26,30 @@ def _variants():
                      nacelle=dc.replace(T.nacelle, shaft_tilt=0.1, yaw_stiffness=1e5, yaw_damping=1e3),
                      hub=dc.replace(T.hub, undersling=0.2, teeter_stiffness=1e4, teeter_damping=1e2, mass=300.0))
     yield dc.replace(T, rotor=dc.replace(T.rotor, blades=3), hub=dc.replace(T.hub, teeter=False))
+    # flexible towers (tower unknowns after the blades; tower-top motion in Kane's equations)
+    tower = Beam(20.0, SectionTable.uniform(mass=300.0, i1=100.0, i2=50.0, i3=50.0, gj=1e9,
+                                            ei2=2e9, ei3=3e9), 3)
+    yield dc.replace(T, tower=tower)
+    yield dc.replace(T, tower=tower, gravity=Gravity(True, 9.81),
+                     rotor=dc.replace(T.rotor, precone=0.05),
+                     nacelle=dc.replace(T.nacelle, shaft_tilt=0.1, yaw_stiffness=1e5,
+                                        yaw_damping=1e3, mass=2000.0, cg_offset=(0.3, 0.2, -0.5),
+                                        inertia_pitch=800.0, inertia_roll=600.0),
+                     hub=dc.replace(T.hub, undersling=0.2, teeter_stiffness=1e4, teeter_damping=1e2, mass=300.0))
+    yield dc.replace(T, tower=dc.replace(tower, elements=2), rotor=dc.replace(T.rotor, blades=3),
+                     hub=dc.replace(T.hub, teeter=False),
+                     nacelle=dc.replace(T.nacelle, yaw_free=False))
 
 
-@pytest.mark.parametrize("turbine", list(_variants()), ids=["paper", "everything-on", "3-blade-rigid-hub"])
+@pytest.mark.parametrize("turbine", list(_variants()),
+                         ids=["paper", "everything-on", "3-blade-rigid-hub", "flexible-tower",
+                              "flexible-tower-everything-on", "flexible-tower-3-blade-no-rigid-dofs"])
 def test_structured_jacobians_equal_plain_complex_step(turbine):
     """Structured Jacobians (batched by subsystem) equal the plain coloured complex-step
     Jacobians of the whole residual to round-off (1e-12 relative), and central differences
-    to 1e-6 relative (a random state, random rates, t = 0.3 s)."""
+    to 1e-6 relative (a random state, random rates, t = 0.3 s). With a flexible tower the
+    differences also cover the tower-top columns (theta, V, Omega of the tip node) in dR/dy
+    and the tip rates in dR/dydot."""
     m = TurbineModel(turbine, elements=3)
     yd, y = _random_state(m)
     Jy, Jd = m.jacobians(yd, y, 0.3)
@@ -47,6 +64,18 @@ def test_structured_jacobians_equal_plain_complex_step(turbine):
         e[j] = h
         fd = (m.residual(yd, y + e, 0.3) - m.residual(yd, y - e, 0.3)) / (2 * h)
         np.testing.assert_allclose(Jy[:, j].toarray().ravel(), fd, atol=1e-6 * scale)
+    if m.tower is not None:
+        tl = m.layout.tower()
+        for j in np.concatenate([tl.theta[-1], tl.V[-1], tl.Omega[-1]]):
+            e = np.zeros(m.n)
+            e[j] = 1e-6
+            fd = (m.residual(yd, y + e, 0.3) - m.residual(yd, y - e, 0.3)) / 2e-6
+            np.testing.assert_allclose(Jy[:, j].toarray().ravel(), fd, atol=1e-6 * scale)
+        for j in np.concatenate([tl.V[-1], tl.Omega[-1]]):
+            e = np.zeros(m.n)
+            e[j] = 1e-6
+            fd = (m.residual(yd + e, y, 0.3) - m.residual(yd - e, y, 0.3)) / 2e-6
+            np.testing.assert_allclose(Jd[:, j].toarray().ravel(), fd, atol=1e-6 * scale)
 
 
 def test_blade_relabelling_symmetry_of_the_equations():

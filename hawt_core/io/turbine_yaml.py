@@ -130,7 +130,8 @@ _HUB = {"radius": True, "undersling": False, "teeter": True, "inertia_lateral": 
         "inertia_longitudinal": True, "teeter_stiffness": False, "teeter_damping": False,
         "mass": False}
 _NACELLE = {"yaw_inertia": True, "yaw_stiffness": False, "yaw_damping": False,
-            "yaw_to_teeter": True, "shaft_tilt": False, "yaw_free": True, "mass": False}
+            "yaw_to_teeter": True, "shaft_tilt": False, "yaw_free": True, "mass": False,
+            "cg_offset": False, "inertia_pitch": False, "inertia_roll": False}
 _BEAM = {"length": True, "elements": True, "sections": True}
 _TOWER = dict(_BEAM, rigid=False)
 _GRAVITY = {"enabled": True, "g": False}
@@ -549,6 +550,18 @@ def _beam(c: _Checker, value: Any, path: str, spec: dict) -> Optional[Beam]:
     return Beam(length=length, sections=sections, elements=elements)
 
 
+def _vector3(c: _Checker, d: Mapping, key: str, path: str):
+    """Three finite numbers (a tuple), (0, 0, 0) when absent; None on error."""
+    if key not in d:
+        return (0.0, 0.0, 0.0)
+    value = _plain(d[key])
+    if not isinstance(value, (list, tuple)) or len(value) != 3:
+        c.error(f"{path}.{key}", "must be a list of three numbers [x1, x2, x3] in metres", value)
+        return None
+    out = [c.number_value(_plain(v), f"{path}.{key}[{i}]", "finite") for i, v in enumerate(value)]
+    return None if None in out else tuple(out)
+
+
 def _tower(c: _Checker, value: Any) -> Optional[Beam]:
     if value is None:
         return None
@@ -598,7 +611,10 @@ def _build(c: _Checker, data: Any, default_name: str) -> Optional[Turbine]:
                        yaw_to_teeter=c.number(n, "yaw_to_teeter", "nacelle", ">= 0"),
                        shaft_tilt=c.number(n, "shaft_tilt", "nacelle", "angle", 0.0),
                        yaw_free=c.boolean(n, "yaw_free", "nacelle"),
-                       mass=c.number(n, "mass", "nacelle", ">= 0", 0.0))
+                       mass=c.number(n, "mass", "nacelle", ">= 0", 0.0),
+                       cg_offset=_vector3(c, n, "cg_offset", "nacelle"),
+                       inertia_pitch=c.number(n, "inertia_pitch", "nacelle", ">= 0", 0.0),
+                       inertia_roll=c.number(n, "inertia_roll", "nacelle", ">= 0", 0.0))
     blade = _beam(c, data["blade"], "blade", _BEAM) if "blade" in data else None
     tower = _tower(c, data.get("tower"))
     gravity = Gravity()
@@ -731,7 +747,11 @@ def dump_turbine(turbine: Turbine) -> str:
         "nacelle": {"yaw_inertia": float(n.yaw_inertia), "yaw_stiffness": float(n.yaw_stiffness),
                     "yaw_damping": float(n.yaw_damping),
                     "yaw_to_teeter": float(n.yaw_to_teeter), "shaft_tilt": float(n.shaft_tilt),
-                    "yaw_free": bool(n.yaw_free), "mass": float(n.mass)},
+                    "yaw_free": bool(n.yaw_free), "mass": float(n.mass),
+                    **({"cg_offset": [float(x) for x in n.cg_offset]}
+                       if any(float(x) != 0.0 for x in n.cg_offset) else {}),
+                    **({"inertia_pitch": float(n.inertia_pitch)} if n.inertia_pitch else {}),
+                    **({"inertia_roll": float(n.inertia_roll)} if n.inertia_roll else {})},
         "blade": _beam_dict(turbine.blade),
         "tower": {"rigid": True} if turbine.tower is None else _beam_dict(turbine.tower),
         "gravity": {"enabled": bool(g.enabled), "g": float(g.g)},

@@ -8,7 +8,12 @@ mass, either DOF removable.  See ``docs/rigid-bodies.md``.
 Frames (every basis right-handed; "x turned by a about z" is a right-handed rotation)
 -------------------------------------------------------------------------------------
 * tower T = inertial N: ``n1`` (= ``t1``) points up along the yaw axis; gravity is ``-g n1``.
-  Origin: the point TY on the yaw axis at the tower top (fixed, the tower is rigid here).
+  Origin: the point TY on the yaw axis at the tower top (fixed for a rigid tower).
+  Flexible tower (``turbine.tower`` given): TY moves with the tower's tip node and the yaw
+  bearing sits on the tip section frame (basis ``T = C(theta_tip)^T``), ``Y = T rot1(qy)``;
+  the tower-top velocity and angular velocity (tip-node V, Omega, B components) are six more
+  generalized speeds whose Kane rows are the loads the rigid system exerts on the tower top
+  (see ``generalized_forces`` and docs/rigid-bodies.md, "Flexible tower").
 * nacelle Y: N turned by the yaw angle ``qy`` about ``y1 = n1``
   (``y2 = cos qy n2 + sin qy n3``, ``y3 = -sin qy n2 + cos qy n3``).
 * tilted nacelle frame Y': Y turned by ``+tilt`` about ``y2``
@@ -43,7 +48,9 @@ Bodies
   Iy includes the hub; for the paper, ``Iy - Ihlat``); its mass centre is on the yaw axis at TY
   (so its mass and other inertias play no role with the rigid tower).
 * hub H: principal inertia ``Ihlat`` about h1, h2 and ``Ihlong`` about h3, mass ``m_hub`` at SH.
-* shaft S massless; the tower rigid and fixed.
+* shaft S massless; the tower rigid and fixed, or a flexible beam (then the nacelle's mass at
+  ``TY + Y cg_offset`` and its inertia ``diag(Iy_n - m |offset_perp|^2, I_pitch, I_roll)``
+  about its mass centre matter).
 
 Loads
 -----
