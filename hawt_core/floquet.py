@@ -68,6 +68,7 @@ _RADAU_RHO = _RADAU_W.sum(axis=1)
 
 DEFAULT_STEPS = {"radau": 256, "paper": 1000}
 _SETTLE_STEPS = 3
+_SETTLE_LOWRANK = False       # the settling steps may use the low-rank stage update too
 
 
 # --------------------------------------------------------------------------------------------
@@ -377,11 +378,15 @@ class _Assembler:
 class _Stepper:
     """One-step maps of E(t) x' = A(t) x, many right-hand sides at once."""
 
-    def __init__(self, coeffs, method: str):
+    def __init__(self, coeffs, method: str, lowrank: Optional[bool] = False):
         self.coeffs = coeffs
         self.method = method
         self.version = None
         self.factorizations = 0
+        self.lowrank = lowrank          # None: automatic, True: forced, False: never
+        self.lowrank_used = False
+        self.lowrank_info: dict = {}
+        self._lr_cache: dict = {}
 
     def _build(self):
         c = self.coeffs
@@ -420,24 +425,64 @@ class _Stepper:
             return t + h * RADAU_IIA["c"]
         return np.array([t + 0.5 * h, t + h])
 
-    def step(self, X: np.ndarray, h: float, Ed: np.ndarray, Ad: np.ndarray) -> np.ndarray:
-        """Advance X (n x m) over one step; Ed, Ad: coefficient data at the stage times."""
-        n = self.coeffs.dae.n
+    def matrices(self, h: float, Ed: np.ndarray, Ad: np.ndarray):
+        """Stage matrix L and right-hand-side matrix R of one step (x1 = out(L^{-1} R x0));
+        both are linear in the coefficient data Ed, Ad (rows: the stage times)."""
         if self.method == "radau":
             vals = np.concatenate([((_RADAU_W / h)[:, :, None] * Ed[:, None, :]).ravel(),
                                    (-Ad).ravel()])
-            L = self.lhs.matrix(vals)
-            R = self.rhs.matrix(((_RADAU_RHO / h)[:, None] * Ed).ravel())
-            lu = spla.splu(L)
-            self.factorizations += 1
-            Xs = lu.solve(np.asarray(R @ X))
-            return Xs[2::3]
+            return (self.lhs.matrix(vals),
+                    self.rhs.matrix(((_RADAU_RHO / h)[:, None] * Ed).ravel()))
         Em, Am = Ed[0] / h, 0.5 * Ad[0][self.a_mid]
-        L = self.lhs.matrix(np.concatenate([Em, -Am, -Ad[1][self.a_end]]))
-        R = self.rhs.matrix(np.concatenate([Em, Am]))
+        return (self.lhs.matrix(np.concatenate([Em, -Am, -Ad[1][self.a_end]])),
+                self.rhs.matrix(np.concatenate([Em, Am])))
+
+    def out_rows(self, n: int) -> np.ndarray:
+        """Rows of the stage solution that hold x1."""
+        return np.arange(n) * 3 + 2 if self.method == "radau" else np.arange(n)
+
+    def stage_index(self, idx: np.ndarray) -> np.ndarray:
+        """Stage-system indices of the variables / equations ``idx``."""
+        idx = np.asarray(idx, dtype=np.int64)
+        if self.method == "radau":
+            return (3 * idx[:, None] + np.arange(3)[None, :]).ravel()
+        return idx
+
+    def step(self, X: np.ndarray, h: float, Ed: np.ndarray, Ad: np.ndarray) -> np.ndarray:
+        """Advance X (n x m) over one step; Ed, Ad: coefficient data at the stage times."""
+        L, R = self.matrices(h, Ed, Ad)
         lu = spla.splu(L)
         self.factorizations += 1
-        return lu.solve(np.asarray(R @ X))
+        Xs = lu.solve(np.asarray(R @ X))
+        return Xs[2::3] if self.method == "radau" else Xs
+
+    def _lowrank_for(self, h: float):
+        """The low-rank update data for step h, or None (not applicable / not wanted)."""
+        if self.lowrank is False:
+            return None
+        if h in self._lr_cache:
+            return self._lr_cache[h]
+        lr, why = None, ""
+        if not isinstance(self.coeffs, FourierCoefficients):
+            why = "coefficients are not a Fourier series"
+        else:
+            if self.version != self.coeffs.version:
+                self._build()
+            R, C, cEv, cAv = _varying_cover(self.coeffs, _LOWRANK_VAR_TOL)
+            n = self.coeffs.dae.n
+            self.lowrank_info.update(rows=R, cols=C)
+            if self.lowrank is None and (R.size + C.size) * _LOWRANK_MAX_FRACTION > n:
+                why = (f"time variation not confined to few rows/columns "
+                       f"({R.size} + {C.size} of n = {n})")
+            elif self.lowrank is None and n < _LOWRANK_MIN_N:
+                why = f"small system (n = {n} < {_LOWRANK_MIN_N}): factorizing is as fast"
+            else:
+                lr = _LowRank(self, h, R, C, cEv, cAv)
+        if lr is None and self.lowrank is True:
+            raise ValueError(f"lowrank=True: {why}")
+        self.lowrank_info["reason"] = why
+        self._lr_cache[h] = lr
+        return lr
 
     def march(self, X0: np.ndarray, t0: float, h: float, nsteps: int,
               store_every: int = 0, store_rows=None, chunk: int = 64):
@@ -447,6 +492,24 @@ class _Stepper:
         samples = []
         if store_every:
             samples.append(X[store_rows].copy())
+        lr = self._lowrank_for(h) if nsteps > 0 else None
+        if lr is not None:
+            ts = np.concatenate([self.stage_times(t0 + i * h, h) for i in range(nsteps)])
+            betas = self.coeffs.basis(ts)[:, 1:].reshape(nsteps, -1)
+            if not lr.check(self, X, h, betas, ts):
+                if self.lowrank is True:
+                    warnings.warn("lowrank=True: the low-rank stage update is inaccurate "
+                                  f"({self.lowrank_info})", RuntimeWarning,
+                                  stacklevel=4)
+                else:
+                    self._lr_cache[h] = lr = None
+        if lr is not None:
+            self.lowrank_used = True
+            for k in range(nsteps):
+                X = lr.step(X, betas[k])
+                if store_every and (k + 1) % store_every == 0 and k + 1 < nsteps:
+                    samples.append(X[store_rows].copy())
+            return X, samples
         k = 0
         while k < nsteps:
             m = min(chunk, nsteps - k)
@@ -468,19 +531,223 @@ class _Stepper:
         return X, samples
 
 
-def _settle(coeffs, h: float, t_end: float) -> np.ndarray:
+# --------------------------------------------------------------------------------------------
+# low-rank time variation: one factorization of the mean stage matrix + Woodbury updates
+_LOWRANK_VAR_TOL = 1e-13      # harmonics below this x the row's largest coefficient: constant
+_LOWRANK_MAX_FRACTION = 8     # automatic: varying rows + columns <= n / 8
+_LOWRANK_MIN_N = 64           # automatic: not for smaller systems
+_LOWRANK_CHECK_TOL = 1e-7     # first step vs a factorized step (relative): gross errors
+
+
+def _varying_cover(coeffs: FourierCoefficients, tol: float):
+    """Rows R and columns C (sorted int arrays) such that every entry of E(t), A(t) with a
+    non-negligible time variation lies in a row of R or a column of C (greedy cover), and the
+    harmonic coefficients (rows 1.. of cE, cA) with the negligible variations set to zero.
+
+    An entry's variation is negligible when the sum of its harmonic amplitudes is at most
+    ``tol`` times the largest coefficient of its row (round-off of the FFT of a constant)."""
+    n = coeffs.dae.n
+    ents, cleaned = [], []
+    for c, p in ((coeffs.cE, coeffs.pE), (coeffs.cA, coeffs.pA)):
+        if c.shape[0] <= 1 or p.nnz == 0:
+            cleaned.append(np.zeros((c.shape[0] - 1, p.nnz)))
+            continue
+        rowmax = np.zeros(n)
+        np.maximum.at(rowmax, p.rows, np.abs(c).max(axis=0))
+        var = np.abs(c[1:]).sum(axis=0) > tol * rowmax[p.rows]
+        cleaned.append(np.where(var[None, :], c[1:], 0.0))
+        ents.append((p.rows[var], p.cols[var]))
+    r = np.concatenate([e[0] for e in ents]) if ents else np.zeros(0, np.int64)
+    cc = np.concatenate([e[1] for e in ents]) if ents else np.zeros(0, np.int64)
+    R, C = [], []
+    while r.size:
+        ur, nr = np.unique(r, return_counts=True)
+        uc, nc = np.unique(cc, return_counts=True)
+        if nr.max() >= nc.max():
+            x = ur[np.argmax(nr)]
+            R.append(x)
+            keep = r != x
+        else:
+            x = uc[np.argmax(nc)]
+            C.append(x)
+            keep = cc != x
+        r, cc = r[keep], cc[keep]
+    return (np.array(sorted(R), dtype=np.int64), np.array(sorted(C), dtype=np.int64),
+            cleaned[0], cleaned[1])
+
+
+class _LowRank:
+    """One step x1 = out(L(t)^{-1} R(t) x0) with L(t) = L0 + P_Rs a(t) + b(t) P_Cs^T.
+
+    L0, R0: stage and right-hand-side matrices of the mean coefficients (one sparse LU per
+    step size).  The harmonics of E(t), A(t) live in the rows R and columns C only, so with
+    beta = the Fourier basis at the stage times (constant term excluded),
+    a = sum_i beta_i A_i (the rows Rs of the harmonic stage matrices), b = sum_i beta_i B_i
+    (their columns Cs, rows Rs removed), R(t) = R0 + P_Rs F(beta) + G(beta) P_C^T.  Woodbury:
+    L^{-1} = L0^{-1} - L0^{-1} U (I + V^T L0^{-1} U)^{-1} V^T L0^{-1},  U = [P_Rs, b],
+    V^T = [a; P_Cs^T]; every product with L0^{-1} is precomputed, so a step costs one n x n
+    by n x d product plus products with the r = |Rs| + |Cs| low-rank directions."""
+
+    def __init__(self, st: "_Stepper", h: float, R, C, cEv, cAv):
+        c = st.coeffs
+        n = c.dae.n
+        ns = st.stage_times(0.0, h).size
+        H = cEv.shape[0]
+        m = ns * H
+        Rs, Cs = st.stage_index(R), st.stage_index(C)
+        nR, nC, nc = Rs.size, Cs.size, C.size
+        L0, R0 = st.matrices(h, np.tile(c.cE[0], (ns, 1)), np.tile(c.cA[0], (ns, 1)))
+        N = L0.shape[0]
+        rmask = np.zeros(N, bool)
+        rmask[Rs] = True
+        cmask = np.zeros(N, bool)
+        cmask[Cs] = True
+        cmask_n = np.zeros(n, bool)
+        cmask_n[C] = True
+        Al, Bl, Fl, Gl = [], [], [], []
+        for j in range(ns):
+            for q in range(H):
+                Ed = np.zeros((ns, c.pE.nnz))
+                Ad = np.zeros((ns, c.pA.nnz))
+                Ed[j], Ad[j] = cEv[q], cAv[q]
+                Lq, Rq = st.matrices(h, Ed, Ad)
+                for M, cm in ((Lq, cmask), (Rq, cmask_n)):
+                    Mc = M.tocoo()
+                    out = ~rmask[Mc.row] & ~cm[Mc.col]
+                    if np.any(Mc.data[out] != 0):
+                        raise AssertionError("low-rank cover misses a varying entry")
+                Lr = Lq.tocsr()
+                Al.append(Lr[Rs])
+                B = Lq[:, Cs].toarray()
+                B[Rs] = 0.0
+                Bl.append(B)
+                Fl.append(Rq.tocsr()[Rs].toarray())
+                G = Rq[:, C].toarray()
+                G[Rs] = 0.0
+                Gl.append(G)
+        lu = spla.splu(L0.tocsc())
+        st.factorizations += 1
+        P = np.zeros((N, nR))
+        P[Rs, np.arange(nR)] = 1.0
+        blocks = [R0.toarray(), P] + Bl + Gl
+        Y = lu.solve(np.asfortranarray(np.hstack(blocks)))
+        W0, Wp = Y[:, :n], Y[:, n:n + nR]
+        o = n + nR
+        WB = Y[:, o:o + m * nC].reshape(N, m, nC)
+        WG = Y[:, o + m * nC:o + m * (nC + nc)].reshape(N, m, nc)
+        A_all = sp.vstack(Al).tocsr() if m else sp.csr_matrix((0, N))
+        out = st.out_rows(n)
+        self.n, self.m, self.nR, self.nC, self.C = n, m, nR, nC, C
+        self.W0, self.Wp, self.WB, self.WG = W0, Wp, WB, WG
+        self.S3W0 = np.ascontiguousarray(W0[out])
+        self.S3Wp = np.ascontiguousarray(Wp[out])
+        self.S3WB = np.ascontiguousarray(WB[out])                # (n, m, nC)
+        self.S3WG = np.ascontiguousarray(WG[out])                # (n, m, nc)
+        self.AW0 = (A_all @ W0).reshape(m, nR, n)
+        self.AWp = (A_all @ Wp).reshape(m, nR, nR)
+        self.AWB = (A_all @ WB.reshape(N, m * nC)).reshape(m, nR, m, nC)
+        self.AWG = (A_all @ WG.reshape(N, m * nc)).reshape(m, nR, m, nc)
+        self.CW0, self.CWp = W0[Cs], Wp[Cs]
+        self.CWB, self.CWG = WB[Cs], WG[Cs]                      # (nC, m, nC), (nC, m, nc)
+        self.F = np.array(Fl).reshape(m, nR, n)
+        self.rank = nR + nC
+        st.lowrank_info.update(rank=self.rank, terms=m)
+
+    def capacitance(self, beta: np.ndarray) -> np.ndarray:
+        nR, nC = self.nR, self.nC
+        Cm = np.eye(nR + nC)
+        Cm[:nR, :nR] += np.tensordot(beta, self.AWp, 1)
+        Cm[:nR, nR:] += np.einsum("i,iakc,k->ac", beta, self.AWB, beta)
+        Cm[nR:, :nR] += self.CWp
+        Cm[nR:, nR:] += np.tensordot(self.CWB, beta, ([1], [0]))
+        return Cm
+
+    @staticmethod
+    def _equilibrate(Cm: np.ndarray):
+        """Row and column scalings r, c with diag(r) Cm diag(c) of unit max-norm rows/columns
+        (the blocks of the capacitance matrix differ by many orders of magnitude)."""
+        r = 1.0 / np.maximum(np.abs(Cm).max(axis=1), 1e-300)
+        c = 1.0 / np.maximum(np.abs(Cm * r[:, None]).max(axis=0), 1e-300)
+        return r, c
+
+    def _solve(self, Cm: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+        r, c = self._equilibrate(Cm)
+        return c[:, None] * np.linalg.solve(Cm * r[:, None] * c[None, :], rhs * r[:, None])
+
+    def step(self, X: np.ndarray, beta: np.ndarray) -> np.ndarray:
+        nR = self.nR
+        FX = np.tensordot(beta, self.F, 1) @ X
+        XC = X[self.C]
+        x1 = self.S3W0 @ X
+        if self.rank == 0:
+            return x1
+        x1 += self.S3Wp @ FX
+        x1 += np.tensordot(self.S3WG, beta, ([1], [0])) @ XC
+        aw = (np.tensordot(beta, self.AW0, 1) @ X + np.tensordot(beta, self.AWp, 1) @ FX
+              + np.einsum("i,iakc,k->ac", beta, self.AWG, beta) @ XC)
+        cw = self.CW0 @ X + self.CWp @ FX + np.tensordot(self.CWG, beta, ([1], [0])) @ XC
+        y = self._solve(self.capacitance(beta), np.vstack([aw, cw]))
+        x1 -= self.S3Wp @ y[:nR]
+        x1 -= np.tensordot(self.S3WB, beta, ([1], [0])) @ y[nR:]
+        return x1
+
+    def stage_solution(self, X: np.ndarray, beta: np.ndarray) -> np.ndarray:
+        """The full stage solution L(t)^{-1} R(t) X (N x d) of one step (for the check)."""
+        nR = self.nR
+        FX = np.tensordot(beta, self.F, 1) @ X
+        XC = X[self.C]
+        w = self.W0 @ X + self.Wp @ FX + np.tensordot(self.WG, beta, ([1], [0])) @ XC
+        if self.rank == 0:
+            return w
+        aw = (np.tensordot(beta, self.AW0, 1) @ X + np.tensordot(beta, self.AWp, 1) @ FX
+              + np.einsum("i,iakc,k->ac", beta, self.AWG, beta) @ XC)
+        cw = self.CW0 @ X + self.CWp @ FX + np.tensordot(self.CWG, beta, ([1], [0])) @ XC
+        y = self._solve(self.capacitance(beta), np.vstack([aw, cw]))
+        return w - self.Wp @ y[:nR] - np.tensordot(self.WB, beta, ([1], [0])) @ y[nR:]
+
+    def check(self, st: "_Stepper", X: np.ndarray, h: float, betas: np.ndarray,
+              ts: np.ndarray) -> bool:
+        """Conditioning of the (equilibrated) capacitance matrices of all steps, and the first
+        step's stage solution for a few combinations of the columns of X against a factorized
+        step with the unmodified coefficients (relative difference; two valid fill-reducing
+        orderings of the turbine's stage matrix already differ by ~1e-10)."""
+        conds = np.ones(1)
+        if self.rank:
+            Cs = np.array([self.capacitance(b) for b in betas])
+            for i in range(Cs.shape[0]):
+                r, c = self._equilibrate(Cs[i])
+                Cs[i] *= r[:, None] * c[None, :]
+            conds = np.linalg.cond(Cs)
+        ns = ts.size // betas.shape[0]
+        Ed, Ad = st.coeffs.data_at(ts[:ns])
+        L, R = st.matrices(h, Ed, Ad)
+        Xc = X @ np.random.default_rng(12345).standard_normal((X.shape[1], min(4, X.shape[1])))
+        ref = spla.splu(L).solve(np.asarray(R @ Xc))
+        st.factorizations += 1
+        z = self.stage_solution(Xc, betas[0])
+        err = float(np.linalg.norm(z - ref) / max(np.linalg.norm(ref), 1e-300))
+        st.lowrank_info.update(check=err, max_capacitance_cond=float(np.max(conds)))
+        return bool(err <= _LOWRANK_CHECK_TOL and np.all(np.isfinite(conds))
+                    and np.max(conds) < 1e12)
+
+
+def _settle(coeffs, h: float, t_end: float, lowrank: Optional[bool] = False,
+            stepper: Optional["_Stepper"] = None) -> np.ndarray:
     """_SETTLE_STEPS Radau IIA steps of length h ending at t_end, applied to all differential
-    unit vectors (the algebraic columns are irrelevant: a step depends on x0 only via E x0)."""
+    unit vectors (the algebraic columns are irrelevant: a step depends on x0 only via E x0).
+    ``stepper``: a Radau stepper to use (and whose low-rank data for h to share)."""
     dae = coeffs.dae
     diff = np.flatnonzero(dae.differential)
     X0 = np.zeros((dae.n, diff.size))
     X0[diff, np.arange(diff.size)] = 1.0
-    st = _Stepper(coeffs, "radau")
+    st = _Stepper(coeffs, "radau", lowrank=lowrank) if stepper is None else stepper
+    f0 = st.factorizations
     X, _ = st.march(X0, t_end - _SETTLE_STEPS * h, h, _SETTLE_STEPS)
-    return X, st.factorizations
+    return X, st.factorizations - f0
 
 
-def _consistent_basis(coeffs, h: float, t_end: float, dynamic_dim: Optional[int]):
+def _consistent_basis(coeffs, h: float, t_end: float, dynamic_dim: Optional[int],
+                      lowrank: Optional[bool] = False, stepper: Optional["_Stepper"] = None):
     """Basis Z (n x d) of consistent values at t_end, with Z_D orthonormal.
 
     d = numerical rank of the settling map with tiny steps (h/100): it is a near-projector onto
@@ -492,10 +759,10 @@ def _consistent_basis(coeffs, h: float, t_end: float, dynamic_dim: Optional[int]
     range of the last steps of the period map (so Phi Z lies in span Z up to O(h^q)).
     """
     diff = np.flatnonzero(coeffs.dae.differential)
-    Xs, f1 = _settle(coeffs, h * 1e-2, t_end)
+    Xs, f1 = _settle(coeffs, h * 1e-2, t_end, lowrank)
     s_small = np.linalg.svd(Xs[diff], compute_uv=False)
     d = _numerical_rank(s_small) if dynamic_dim is None else int(dynamic_dim)
-    X, f2 = _settle(coeffs, h, t_end)
+    X, f2 = _settle(coeffs, h, t_end, lowrank, stepper)
     U, s, Vt = np.linalg.svd(X[diff], full_matrices=False)
     Z = X @ (Vt[:d].T / s[:d])
     if d > 0 and dynamic_dim is None:
@@ -551,6 +818,8 @@ class Monodromy:
     coefficients: object
     factorizations: int
     wall_time: float
+    lowrank: bool = False              # marched with the low-rank stage update
+    lowrank_info: dict = field(default_factory=dict)
 
     def eig(self) -> tuple[np.ndarray, np.ndarray]:
         """The d dynamic eigenpairs (mu, V) of ``matrix`` (columns of V in basis coordinates).
@@ -615,12 +884,17 @@ def monodromy(dae: LinearPeriodicDAE, method: str = "radau", steps: Optional[int
               fast: Optional[bool] = None, coefficients="fourier", harmonics="auto",
               fourier_tol: float = 1e-10, samples: int = 128, observed=None,
               dynamic_dim: Optional[int] = None, store_all: bool = False,
-              full: bool = False) -> Monodromy:
+              full: bool = False, lowrank: Optional[bool] = None) -> Monodromy:
     """March the consistent subspace over one period (or T/Nb with Fast Floquet).
 
     full=True marches all n unit vectors instead (the descriptor monodromy, n x n, for
     diagnostics: it shows the spurious multipliers); Monodromy.eig() then selects the d
-    eigenvectors closest to the consistent subspace."""
+    eigenvectors closest to the consistent subspace.
+
+    lowrank: None (automatic) uses the low-rank stage update (one factorization of the mean
+    stage matrix, Woodbury per step) when the harmonics of E(t), A(t) are confined to a few
+    rows and columns (<= n/8 of them, n >= 64) and the coefficients are a Fourier series;
+    True forces it, False factorizes every step."""
     t_start = time.perf_counter()
     if method not in ("radau", "paper"):
         raise ValueError("method must be 'radau' or 'paper'")
@@ -633,14 +907,19 @@ def monodromy(dae: LinearPeriodicDAE, method: str = "radau", steps: Optional[int
     K, M = _grid(K, samples, nb)
     h = dae.period / K
     coeffs = _make_coefficients(dae, coefficients, harmonics, fourier_tol)
-    Z, s, d, nf = _consistent_basis(coeffs, h, 0.0, dynamic_dim)
+    stepper = _Stepper(coeffs, method, lowrank=lowrank)
+    share = method == "radau" and _SETTLE_LOWRANK      # the settling steps with h reuse its data
+    Z, s, d, nf = _consistent_basis(coeffs, h, 0.0, dynamic_dim,
+                                    lowrank=lowrank if _SETTLE_LOWRANK else False,
+                                    stepper=stepper if share else None)
+    if share:
+        nf -= stepper.factorizations      # those are counted in stepper.factorizations
     diff = np.flatnonzero(dae.differential)
     if store_all:
         rows = np.arange(dae.n)
     else:
         rows = diff if observed is None else np.asarray(observed, dtype=int)
         rows = _closure_rows(rows, dae.S if fast else None, nb)
-    stepper = _Stepper(coeffs, method)
     nsteps = K // nb
     diff = np.flatnonzero(dae.differential)
     X0 = np.eye(dae.n) if full else Z
@@ -653,7 +932,8 @@ def monodromy(dae: LinearPeriodicDAE, method: str = "radau", steps: Optional[int
                      fast=bool(fast), blades=nb, method=method, steps=K, marched_steps=nsteps,
                      n_dynamic=d, settle_singular_values=s, coefficients=coeffs,
                      factorizations=nf + stepper.factorizations,
-                     wall_time=time.perf_counter() - t_start)
+                     wall_time=time.perf_counter() - t_start, lowrank=stepper.lowrank_used,
+                     lowrank_info=dict(stepper.lowrank_info))
     mono._diff = diff
     return mono
 
@@ -698,10 +978,14 @@ class FloquetResult:
 
     @property
     def periodic_samples(self) -> np.ndarray:
-        """(M, len(sample_rows), d) complex: p_i(t_m), built on demand (conjugate members are
-        the conjugates of their partners)."""
-        P, nu = self._p_unique, self._n_upper
-        return np.concatenate([P[:, :, :nu], np.conj(P[:, :, :nu]), P[:, :, nu:]], axis=2)
+        """(M, len(sample_rows), d) complex: p_i(t_m), built on first use and cached
+        (conjugate members are the conjugates of their partners); do not modify in place."""
+        cached = self.__dict__.get("_periodic_samples_cache")
+        if cached is None:
+            P, nu = self._p_unique, self._n_upper
+            cached = np.concatenate([P[:, :, :nu], np.conj(P[:, :, :nu]), P[:, :, nu:]], axis=2)
+            self.__dict__["_periodic_samples_cache"] = cached
+        return cached
 
     def periodic_sample(self, i: int) -> np.ndarray:
         """(M, len(sample_rows)) samples of the periodic eigenvector of mode i."""
@@ -742,17 +1026,19 @@ def floquet_analysis(dae: LinearPeriodicDAE, method: str = "radau", steps: Optio
                      fast: Optional[bool] = None, samples: int = 128, observed=None,
                      weights=None, coefficients="fourier", harmonics="auto",
                      fourier_tol: float = 1e-10, dynamic_dim: Optional[int] = None,
-                     store_all: bool = False) -> FloquetResult:
+                     store_all: bool = False, lowrank: Optional[bool] = None) -> FloquetResult:
     """Floquet multipliers, resolved characteristic exponents and periodic eigenvectors.
 
     observed : indices of the variables used for the dominant-harmonic analysis (default: all
         differential variables); weights : per observed variable (default 1), applied to the
         squared Fourier amplitudes, so that units do not decide.
+    lowrank : low-rank stage update (see :func:`monodromy`); None automatic.
     """
     t0 = time.perf_counter()
     mono = monodromy(dae, method=method, steps=steps, fast=fast, coefficients=coefficients,
                      harmonics=harmonics, fourier_tol=fourier_tol, samples=samples,
-                     observed=observed, dynamic_dim=dynamic_dim, store_all=store_all)
+                     observed=observed, dynamic_dim=dynamic_dim, store_all=store_all,
+                     lowrank=lowrank)
     t1 = time.perf_counter()
     T, w0, nb = dae.period, dae.omega, mono.blades
     d = mono.n_dynamic
@@ -785,20 +1071,30 @@ def floquet_analysis(dae: LinearPeriodicDAE, method: str = "radau", steps: Optio
     if w.size != obs_local.size:
         raise ValueError("weights must have one entry per observed variable")
     Xs = np.array(mono.samples)                     # (M/nb, rows, d) real
-    Xm = np.matmul(Xs, Vc)                          # (M/nb, rows, modes)
+    Mb = Xs.shape[0]
+    Xm = np.empty((Mb * nb, Xs.shape[1], len(mus)), dtype=complex)   # (M, rows, modes)
+    np.matmul(Xs, Vc, out=Xm[:Mb])
     if nb > 1:
-        Srr = dae.S[obs_rows][:, obs_rows].toarray()
-        blocks = [Xm]
-        cur = Xm
+        Srr = dae.S[obs_rows][:, obs_rows].tocsr()
+        Srr.sum_duplicates()
+        perm = None
+        if Srr.nnz == Srr.shape[0] and np.all(np.diff(Srr.indptr) == 1):
+            perm, sgn = Srr.indices, Srr.data          # a signed permutation: gather rows
+        else:
+            Srr = Srr.toarray()
         for j in range(1, nb):
-            cur = np.matmul(Srr, cur) * mus[None, None, :]
-            blocks.append(cur)
-        Xm = np.concatenate(blocks, axis=0)
+            prev, cur = Xm[(j - 1) * Mb:j * Mb], Xm[j * Mb:(j + 1) * Mb]
+            if perm is not None:
+                np.multiply(prev[:, perm, :], sgn[None, :, None], out=cur)
+            else:
+                np.matmul(Srr, prev, out=cur)
+            cur *= mus[None, None, :]
     M = Xm.shape[0]
     tm = np.arange(M) * T / M
     lam = mus ** nb
     eta0 = np.log(mus) * nb / T                     # e^{eta0 T} = lambda
-    P = Xm * np.exp(-eta0[None, None, :] * tm[:, None, None])
+    P = Xm
+    P *= np.exp(-eta0[None, None, :] * tm[:, None, None])
     C = np.fft.fft(P[:, obs_local, :], axis=0) / M  # (M, obs, modes)
     energy = np.einsum("r,krm->km", w, np.abs(C) ** 2)
     kk = np.fft.fftfreq(M, 1.0 / M).astype(int)
@@ -827,11 +1123,12 @@ def floquet_analysis(dae: LinearPeriodicDAE, method: str = "radau", steps: Optio
                           np.ones(idx_re.size, bool)])
     Vfull = mono.basis @ Vc
     all_V = np.concatenate([Vfull[:, idx_up], np.conj(Vfull[:, idx_up]), Vfull[:, idx_re]], axis=1)
-    Pm = P * np.exp(-1j * harm[None, None, :] * w0 * tm[:, None, None])
+    Pm = P
+    Pm *= np.exp(-1j * harm[None, None, :] * w0 * tm[:, None, None])
     # normalise: weighted RMS of p over the observed rows = 1, largest component real > 0
     nrm = np.sqrt(np.einsum("r,mrk->k", w, np.abs(Pm[:, obs_local, :]) ** 2) / M)
     nrm[nrm == 0] = 1.0
-    Pm = Pm / nrm
+    Pm /= nrm
     flat = np.abs(Pm[:, obs_local, :]).reshape(-1, len(mus))
     jmax = np.argmax(flat, axis=0)
     big = Pm[:, obs_local, :].reshape(-1, len(mus))[jmax, np.arange(len(mus))]
@@ -851,7 +1148,7 @@ def floquet_analysis(dae: LinearPeriodicDAE, method: str = "radau", steps: Optio
         sample_rows=obs_rows, _p_unique=Pm, _n_upper=nu, omega=w0, period=T, method=method,
         steps=mono.steps, fast=mono.fast, blades=nb, n_dynamic=d, wall_time=t2 - t0,
         timings={"monodromy": t1 - t0, "analysis": t2 - t1,
-                 "factorizations": mono.factorizations,
+                 "factorizations": mono.factorizations, "lowrank": mono.lowrank,
                  "coefficient_evaluations": getattr(mono.coefficients, "evaluations", None),
                  "fourier_harmonics": getattr(mono.coefficients, "harmonics", None),
                  "fourier_error": getattr(mono.coefficients, "error", None)})
