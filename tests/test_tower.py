@@ -441,3 +441,33 @@ def test_tower_layout_names_and_relabelling(soft_tower_turbine):
     lhs = m.residual(S @ yd, S @ y, 0.21 + m.period / 2)
     rhs = S @ m.residual(yd, y, 0.21)
     np.testing.assert_allclose(lhs, rhs, atol=1e-9 * np.abs(rhs).max())
+
+
+# ---------------------------------------------------------------------------- file format
+def test_nacelle_mass_properties_in_the_turbine_file():
+    """nacelle.cg_offset / inertia_pitch / inertia_roll: read, validated (three finite numbers;
+    inertias >= 0), written back only when not the defaults (the default file's dump does not
+    change), and the model refuses a yaw inertia below the hub's share plus the nacelle's
+    offset mass with a flexible tower."""
+    import yaml
+    from hawt_core.io import TurbineFileError, dump_turbine, turbine_from_dict
+    from hawt_core.io.turbine_yaml import turbines_equal
+    d = yaml.safe_load(dump_turbine(PAPER))
+    assert not {"cg_offset", "inertia_pitch", "inertia_roll"} & set(d["nacelle"])
+    d["nacelle"].update(cg_offset=[0.5, 0, -1], inertia_pitch=100.0, inertia_roll=50)
+    t = turbine_from_dict(d)
+    assert t.nacelle.cg_offset == (0.5, 0.0, -1.0) and t.nacelle.inertia_roll == 50.0
+    assert turbines_equal(turbine_from_dict(yaml.safe_load(dump_turbine(t))), t)
+    for bad, msg in (([1, 2], "three numbers"), ([0, float("nan"), 0], "finite")):
+        d["nacelle"]["cg_offset"] = bad
+        with pytest.raises(TurbineFileError, match=msg):
+            turbine_from_dict(d)
+    d["nacelle"]["cg_offset"] = [0, 0, 0]
+    d["nacelle"]["inertia_pitch"] = -1.0
+    with pytest.raises(TurbineFileError, match="inertia_pitch"):
+        turbine_from_dict(d)
+    heavy = dc.replace(PAPER, tower=_tower(20.0, 300.0, 1e10, 1e10, 1e10, 100.0, 2),
+                       nacelle=dc.replace(PAPER.nacelle, mass=5000.0, cg_offset=(0, 0, -2.0)))
+    with pytest.raises(ValueError, match="yaw_inertia"):
+        RigidSystem(heavy)
+    RigidSystem(dc.replace(heavy, tower=None))      # rigid tower: unchanged behaviour

@@ -499,8 +499,19 @@ class RigidSystem:
         signs = [1.0] * int(self.yaw_free) + [-1.0] * int(self.teeter)
         return np.array(signs * 2)
 
-    def hub_kinetic_energy(self, q, u, t):
-        """Kinetic energy of the rigid bodies (nacelle + hub, blades excluded) [J]."""
+    def hub_kinetic_energy(self, q, u, t, tower=None):
+        """Kinetic energy of the rigid bodies (nacelle + hub, blades excluded) [J]; with a
+        flexible tower including the tower-top motion (``tower``: see generalized_forces)."""
+        if self.flexible_tower:
+            k = self._kin_tower(q, u, t, tower)
+            H, Y = k["fr"]["H"], k["fr"]["Y"]
+            wH, wY = k["w_H"], k["w_Y"]
+            v_c = k["v_T"] + np.cross(wY, k["r_c"])
+            I_H = H @ self.hub_inertia @ H.T
+            I_Y = Y @ self.nacelle_inertia @ Y.T
+            return (0.5 * (wH @ (I_H @ wH)) + 0.5 * self.hub_mass * (k["v_SH"] @ k["v_SH"])
+                    + 0.5 * (wY @ (I_Y @ wY)) + 0.5 * self.nacelle_mass * (v_c @ v_c))
+        self._check_tower(tower)
         k = self._kin(q, u, t)
         H = k["fr"]["H"]
         w = k["w_H"]
