@@ -68,7 +68,7 @@ _RADAU_RHO = _RADAU_W.sum(axis=1)
 
 DEFAULT_STEPS = {"radau": 256, "paper": 1000}
 _SETTLE_STEPS = 3
-_SETTLE_LOWRANK = False       # the settling steps may use the low-rank stage update too
+_SETTLE_LOWRANK = True        # the settling steps may use the low-rank stage update too
 
 
 # --------------------------------------------------------------------------------------------
@@ -778,12 +778,15 @@ def _consistent_basis(coeffs, h: float, t_end: float, dynamic_dim: Optional[int]
 
 def _numerical_rank(s: np.ndarray, min_gap_decades: float = 4.0) -> int:
     """Rank at the largest gap in log10(s) at least min_gap_decades wide whose lower side is
-    below 1e-6 s[0] (the nonzero singular values of the near-projector are >= ~1)."""
+    below 1e-6 s[0] (the nonzero singular values of the near-projector are >= ~1) and whose
+    upper side is above 1e-12 s[0]: gaps inside the round-off tail (the annihilated
+    components, ~1e-20 .. 1e-30 s[0] with exact Jacobians) are not a rank."""
     if s.size == 0 or s[0] == 0:
         return 0
     ls = np.log10(np.maximum(s / s[0], 1e-300))
     gaps = ls[:-1] - ls[1:]
-    cand = [(g, i) for i, g in enumerate(gaps) if g >= min_gap_decades and ls[i + 1] < -6.0]
+    cand = [(g, i) for i, g in enumerate(gaps)
+            if g >= min_gap_decades and ls[i + 1] < -6.0 and ls[i] > -12.0]
     if not cand:
         if ls[-1] < -10.0:
             warnings.warn("consistent subspace: no clear rank gap in the settling map; "

@@ -441,9 +441,11 @@ def test_lowrank_stage_update_on_the_turbine(monkeypatch):
     """The paper's turbine (no gravity: constant steady state; only the yaw equation and the
     yaw-rate column vary with azimuth): modal_analysis with the low-rank path forced on and
     off (floquet_analysis(..., lowrank=True/False)) reports the same modes; multipliers of the
-    reported modes agree to 1e-8 (the free-yaw pair, a defective double multiplier at 1 with
-    sqrt(eps) sensitivity: 1e-6).  Tolerance: the per-step path itself moves these multipliers
-    by up to ~1e-9 under another valid fill-reducing ordering of the stage matrix."""
+    reported modes agree to 2e-7 (the free-yaw pair, a defective double multiplier at 1 with
+    sqrt(eps) sensitivity: 1e-6).  Tolerance: round-off of the per-step path itself; another
+    valid fill-reducing ordering of its stage matrices (permc_spec='MMD_AT_PLUS_A') moves these
+    multipliers by 3e-8 (N = 3, 4) .. 5e-7 (N = 2); the low-rank path differs from the default
+    ordering by 6e-9 .. 4e-8 at N = 4."""
     import functools
 
     import hawt_core.modal as modal
@@ -471,5 +473,5 @@ def test_lowrank_stage_update_on_the_turbine(monkeypatch):
     print(f"turbine N=4: multiplier difference {worst[False]:.1e} (yaw {worst[True]:.1e}); "
           f"Floquet {a.timings['floquet']:.2f} -> {b.timings['floquet']:.2f} s, "
           f"{a.floquet.timings['factorizations']} -> {b.floquet.timings['factorizations']} LU")
-    assert worst[False] < 1e-8
+    assert worst[False] < 2e-7
     assert worst[True] < 1e-6
