@@ -8,9 +8,13 @@ same, see docs/campbell.md).  The work unit is the top-level, picklable
 returns plain data (per-mode dicts and the eigenvectors needed for tracking).
 
 Tracking: at every speed the modes are assigned to the tracks of the previous speeds by the
-modal assurance criterion (MAC) of their Floquet eigenvectors x(0) on the displacement-like
-rows (rigid yaw and teeter angles times the rotor radius, blade u, blade theta times the blade
-length: tip metres), solved as a linear assignment (Hungarian method,
+modal assurance criterion (MAC) of their periodic Floquet eigenvectors on the
+displacement-like rows (rigid yaw and teeter angles times the rotor radius, blade u, blade
+theta times the blade length: tip metres), compared through their Fourier coefficients over
+one revolution (harmonics -4..4) and maximised over re-indexings of the harmonics by
+multiples of the blade count under Fast Floquet (the exponent's whole-per-rev ambiguity;
+a 2-blade rotor: 0 and +-2 per-rev), solved as a linear assignment (Hungarian
+method,
 ``scipy.optimize.linear_sum_assignment``) on ``1 - MAC`` plus a small frequency-change term
 that only breaks near-ties.  Each track keeps the label its mode had at the first speed where
 it appeared; a mode no track claims starts a new track.
@@ -84,6 +88,29 @@ _LIMITED_PID = None
 
 
 # ---------------------------------------------------------------------------- work unit
+#: Harmonics -K..K of the periodic eigenvectors kept for tracking.
+TRACK_HARMONICS = 4
+#: Largest harmonic re-indexing tried when comparing two modes (per-rev).
+MAX_HARMONIC_SHIFT = 3
+
+
+def _harmonic_coefficients(fl, rows, wts, cols):
+    """Fourier coefficients (2K+1, len(rows), len(cols)) over one revolution of the periodic
+    eigenvectors p(t) on the display rows (tip metres), harmonics -K..K (K =
+    TRACK_HARMONICS); None when the Floquet samples do not cover the display rows."""
+    pos = {int(r): j for j, r in enumerate(fl.sample_rows)}
+    if not cols or any(int(r) not in pos for r in rows):
+        return None
+    idx = np.array([pos[int(r)] for r in rows])
+    K = TRACK_HARMONICS
+    out = np.empty((2 * K + 1, len(rows), len(cols)), complex)
+    for j, c in enumerate(cols):
+        P = fl.periodic_sample(int(c))[:, idx] * wts[None, :]          # (M, rows)
+        F = np.fft.fft(P, axis=0) / P.shape[0]
+        out[:, :, j] = F[np.arange(-K, K + 1) % P.shape[0]]
+    return out
+
+
 def campbell_point(task: dict) -> dict:
     """One rotor speed: modal analysis and the plain-data summary used by :func:`campbell`.
 
@@ -92,7 +119,8 @@ def campbell_point(task: dict) -> dict:
     BLAS is limited to ``task.get("blas_threads", 1)`` thread(s) first.
 
     Returns ``{"speed", "modes": [mode dict + "label", ...], "vectors": complex (m, n_modes)
-    (display rows, tip metres), "settings", "unresolved", "compute_time", "warnings" (the
+    (x(0) on the display rows, tip metres), "harmonics": complex (2K+1, m, n_modes) (Fourier
+    coefficients of the periodic eigenvectors on the same rows) or None, "settings", "unresolved", "compute_time", "warnings" (the
     analysis' warning messages, collected instead of printed), "pid"}``.
     """
     global _LIMITED_PID
@@ -109,9 +137,11 @@ def campbell_point(task: dict) -> dict:
                              method=task.get("method"))
     messages = list(dict.fromkeys(f"{w.category.__name__}: {w.message}" for w in caught))
     rows, wts = _display_rows(res.model)
-    X = res.floquet.eigenvectors
+    fl = res.floquet
+    X = fl.eigenvectors
     cols = [m.column for m in res.modes]
     vectors = X[rows][:, cols] * wts[:, None] if cols else np.zeros((len(rows), 0), complex)
+    harmonics = _harmonic_coefficients(fl, rows, wts, cols)
     from .plotting import mode_label
     modes = []
     for m in res.modes:
@@ -119,7 +149,8 @@ def campbell_point(task: dict) -> dict:
         d["label"] = mode_label(m)
         modes.append(d)
     return {"speed": float(res.model.rotor_speed), "modes": modes,
-            "vectors": np.ascontiguousarray(vectors), "settings": dict(res.settings),
+            "vectors": np.ascontiguousarray(vectors), "harmonics": harmonics,
+            "settings": dict(res.settings),
             "unresolved": int(res.unresolved), "compute_time": float(res.compute_time),
             "warnings": messages, "pid": pid}
 
@@ -215,11 +246,11 @@ class CampbellResult:
                 w.writerow({k: (f"{v:.12g}" if isinstance(v, float) else v) for k, v in r.items()})
         return str(path)
 
-    def plot(self, path, max_hz: Optional[float] = None):
+    def plot(self, path, max_hz: Optional[float] = None, tracks="table2"):
         """Campbell diagram (frequency [Hz] vs rotor speed [rpm], 1P..nP rays) and the damping
-        ratios, to a PNG file."""
+        ratios, to a PNG file; ``tracks``: "table2" (default), "all" or a list of labels."""
         from .plotting import plot_campbell
-        return plot_campbell(self, path, max_hz=max_hz)
+        return plot_campbell(self, path, max_hz=max_hz, tracks=tracks)
 
     def table(self) -> str:
         lines = [f"Campbell diagram of '{self.settings.get('turbine', '')}': "
@@ -243,11 +274,29 @@ class CampbellResult:
 
 
 # ---------------------------------------------------------------------------- tracking
-def _mac_matrix(A: np.ndarray, B: np.ndarray) -> np.ndarray:
-    """MAC between the columns of A (m, p) and B (m, q) -> (p, q)."""
-    num = np.abs(np.conj(A).T @ B) ** 2
-    den = np.outer((np.abs(A) ** 2).sum(0), (np.abs(B) ** 2).sum(0))
-    return num / np.where(den > 0, den, 1.0)
+def _mac_matrix(A: np.ndarray, B: np.ndarray, max_shift: int = 0, step: int = 1) -> np.ndarray:
+    """MAC between the modes (last axis) of A (H, m, p) and B (H, m, q) -> (p, q); with
+    ``max_shift`` > 0 (A, B Fourier coefficients over harmonics -K..K) the best over
+    re-indexings of B's harmonics by -max_shift..max_shift, i.e. invariant to the whole-per-rev
+    ambiguity of the Floquet exponent (x = p(t) e^{eta t} = (p e^{-ik Omega t}) e^{(eta + ik
+    Omega) t}), trying the multiples of ``step`` only (the blade count under Fast Floquet: a
+    shift by one harmonic would turn a symmetric two-blade pattern into an antisymmetric-
+    looking one).  2-D A, B are single vectors (m, p), (m, q)."""
+    if A.ndim == 2:
+        A, B = A[None], B[None]
+    den = np.outer((np.abs(A) ** 2).sum((0, 1)), (np.abs(B) ** 2).sum((0, 1)))
+    den = np.where(den > 0, den, 1.0)
+    H = A.shape[0]
+    best = np.zeros(den.shape)
+    for s in range(-max_shift, max_shift + 1):
+        if abs(s) >= H or s % max(1, step):
+            continue
+        # harmonic k of A against harmonic k + s of B
+        a = A[max(0, -s):H - max(0, s)]
+        b = B[max(0, s):H - max(0, -s)]
+        num = np.abs(np.einsum("kmp,kmq->pq", np.conj(a), b)) ** 2
+        best = np.maximum(best, num / den)
+    return best
 
 
 def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
@@ -273,17 +322,26 @@ def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
             # does not replace the track's reference: the next clean speed matches the clean one
             t["vec"] = v
 
+    # harmonic coefficients when every point has them, else the eigenvectors x(0)
+    use_h = all(p.get("harmonics") is not None or not p["modes"] for p in points)
+    st = next((p["settings"] for p in points if p.get("settings")), {})
+    step = int(st.get("blades", 1)) if st.get("fast") else 1
+    max_shift = max(MAX_HARMONIC_SHIFT, step) if use_h else 0
     for i, p in enumerate(points):
-        modes, V = p["modes"], p["vectors"]
+        modes = p["modes"]
+        V = p["harmonics"] if use_h and modes else p["vectors"][None]
+        V = V if modes else np.zeros((1, 0, 0), complex)
+        if not modes:
+            continue
         if not tracks:
             for j, m in enumerate(modes):
-                put(new_track(i, m, V[:, j]), i, m, V[:, j], 1.0)
+                put(new_track(i, m, V[..., j]), i, m, V[..., j], 1.0)
             continue
-        if V.shape[0] != tracks[0]["vec"].shape[0]:
+        if V.shape[:-1] != tracks[0]["vec"].shape:
             raise ValueError("campbell: the eigenvectors of different speeds have different "
                              "sizes (same turbine and elements needed)")
-        Tv = np.stack([t["vec"] for t in tracks], 1)
-        mac = _mac_matrix(Tv, V)                                   # (tracks, modes)
+        Tv = np.stack([t["vec"] for t in tracks], -1)
+        mac = _mac_matrix(Tv, V, max_shift, step)                     # (tracks, modes)
         ft = np.array([t["f"] for t in tracks])
         fm = np.array([m["frequency_hz"] for m in modes])
         rel = np.abs(ft[:, None] - fm[None, :]) / np.maximum(
@@ -293,11 +351,11 @@ def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
         taken = set()
         for a, b in zip(ti, mj):
             if mac[a, b] >= min_mac:
-                put(tracks[a], i, modes[b], V[:, b], float(mac[a, b]))
+                put(tracks[a], i, modes[b], V[..., b], float(mac[a, b]))
                 taken.add(b)
         for j, m in enumerate(modes):
             if j not in taken:
-                put(new_track(i, m, V[:, j]), i, m, V[:, j], float("nan"))
+                put(new_track(i, m, V[..., j]), i, m, V[..., j], float("nan"))
     speeds = np.array([float(p.get("speed", np.nan)) for p in points])
     # unique labels (a label reused by a track born later gets a suffix)
     seen = {}
@@ -368,6 +426,7 @@ def check_speeds(speeds) -> np.ndarray:
 
 def _failed_point(speed: float, exc: BaseException, rows: int) -> dict:
     return {"speed": float(speed), "modes": [], "vectors": np.zeros((rows, 0), complex),
+            "harmonics": None,
             "settings": {}, "unresolved": 0, "compute_time": 0.0, "warnings": [],
             "error": f"{type(exc).__name__}: {' '.join(str(exc).split())}", "pid": None}
 

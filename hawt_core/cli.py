@@ -292,7 +292,7 @@ def cmd_campbell(args) -> int:
         result.to_csv(args.csv)
         print(f"wrote {args.csv}")
     if args.plot:
-        result.plot(args.plot)
+        result.plot(args.plot, tracks="all" if args.all_modes else "table2")
         print(f"wrote {args.plot}")
     return 0
 
@@ -321,6 +321,9 @@ def _campbell_args(p):
                    help="write the Campbell diagram to this PNG file")
     p.add_argument("--csv", metavar="FILE", default=None,
                    help="write speed, track, frequency, real part and damping rows to FILE")
+    p.add_argument("--all-modes", action="store_true",
+                   help="plot every track (default: the Table 2 ones: yaw, teeter and the "
+                        "first two of each family and symmetry)")
 
 
 # ---------------------------------------------------------------------------- main

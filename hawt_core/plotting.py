@@ -384,15 +384,29 @@ def plot_turbine_modes(result, path_or_dir, modes=None) -> list:
 
 
 # ============================================================================ Campbell diagram
-def plot_campbell(result, path, max_hz=None, max_rays: int = 12) -> Path:
-    """Campbell diagram of a CampbellResult: frequency [Hz] of every track against the rotor
+def plot_campbell(result, path, max_hz=None, max_rays: int = 12, tracks="table2") -> Path:
+    """Campbell diagram of a CampbellResult: frequency [Hz] of the tracks against the rotor
     speed [rpm] with the 1P..nP excitation rays (n <= max_rays), and the damping ratios below.
+    ``tracks``: "table2" (default: the rigid yaw/teeter tracks and the first two of each
+    elastic (family, symmetry), as in the paper's Table 2), "all", or a list of labels.
     The curves are the tracks' continuous frequencies (the dominant frequency plus the integer
     per-rev that keeps a track continuous; such points are circled). PNG."""
     any_shift = False
     plt = _pyplot()
     rpm = np.asarray(result.rpm, float)
-    tracks = list(result.tracks)
+    if tracks == "all":
+        tracks = list(result.tracks)
+    elif tracks == "table2":
+        tracks = [t for t in result.tracks
+                  if (t.family in ("yaw", "teeter") or t.index <= 2) and "#" not in t.label
+                  or "#" in t.label and t.label.split(" #")[0] in
+                  {u.label for u in result.tracks if u.family in ("yaw", "teeter")
+                   or u.index <= 2}]
+    else:
+        wanted = list(tracks)
+        tracks = [t for t in result.tracks if t.label in wanted]
+    if not tracks:
+        raise ValueError("plot: no tracks to plot")
     fmax = max([np.nanmax(t.continuous_hz) for t in tracks if np.any(t.present())] or [1.0])
     top = float(max_hz) if max_hz else 1.05 * fmax
     fig, (ax, axd) = plt.subplots(2, 1, figsize=(9, 8.5), sharex=True,

@@ -313,3 +313,26 @@ def test_failed_speed_is_skipped(turbine, monkeypatch):
         assert "analysis failed at 5.5 rad/s" in res.table()
         with pytest.raises(RuntimeError, match="converge"):
             campbell(turbine, [5.0, 5.5], elements=1, steps=64, executor=pool, errors="raise")
+
+
+def test_harmonic_mac_invariance():
+    """Reference: the Floquet ambiguity x = p e^{eta t} = (p e^{-ik Omega t}) e^{(eta+ik
+    Omega) t}: re-indexing the Fourier coefficients by k = 2 (a multiple of the blade count)
+    gives MAC 1 to 1e-12; a re-indexing by 1 is not tried for two blades (MAC < 0.5 for
+    random coefficients), and without harmonics the plain MAC is used (exact 1 for a
+    phase-rotated vector)."""
+    from hawt_core.campbell import _mac_matrix
+    rng = np.random.default_rng(0)
+    K, m = 4, 12
+    C = np.zeros((2 * K + 1, m), complex)
+    C[2:-2] = rng.normal(size=(2 * K - 3, m)) + 1j * rng.normal(size=(2 * K - 3, m))
+    C2 = np.zeros_like(C)
+    C2[:-2] = C[2:]                         # harmonics moved down by 2 (outer two are zero)
+    C1 = np.zeros_like(C)
+    C1[:-1] = C[1:]
+    A = C[..., None]
+    assert abs(_mac_matrix(A, C2[..., None], 3, 2)[0, 0] - 1) < 1e-12
+    assert _mac_matrix(A, C2[..., None], 0, 1)[0, 0] < 0.5
+    assert _mac_matrix(A, C1[..., None], 3, 2)[0, 0] < 0.5
+    v = rng.normal(size=(m, 1)) + 1j * rng.normal(size=(m, 1))
+    assert abs(_mac_matrix(v, v * np.exp(0.7j))[0, 0] - 1) < 1e-12
