@@ -68,7 +68,7 @@ _RADAU_RHO = _RADAU_W.sum(axis=1)
 
 DEFAULT_STEPS = {"radau": 256, "paper": 1000}
 _SETTLE_STEPS = 3
-_SETTLE_LOWRANK = True        # the settling steps may use the low-rank stage update too
+_SETTLE_LOWRANK = True        # the settling steps with the marching step h use it too
 
 
 # --------------------------------------------------------------------------------------------
@@ -505,10 +505,21 @@ class _Stepper:
                     self._lr_cache[h] = lr = None
         if lr is not None:
             self.lowrank_used = True
+            K = lr.K
+            full_samples = bool(store_every) and not np.all(np.isin(store_rows, K))
+            spos = None if not store_every or full_samples else np.searchsorted(K, store_rows)
+            XK = X[K]
             for k in range(nsteps):
-                X = lr.step(X, betas[k])
-                if store_every and (k + 1) % store_every == 0 and k + 1 < nsteps:
-                    samples.append(X[store_rows].copy())
+                sample = store_every and (k + 1) % store_every == 0 and k + 1 < nsteps
+                if k + 1 == nsteps or (sample and full_samples):
+                    X = lr.step(XK, betas[k], rows="all")
+                    XK = X[K]
+                    if sample:
+                        samples.append(X[store_rows].copy())
+                else:
+                    XK = lr.step(XK, betas[k])
+                    if sample:
+                        samples.append(XK[spos].copy())
             return X, samples
         k = 0
         while k < nsteps:
@@ -604,7 +615,7 @@ class _LowRank:
         cmask[Cs] = True
         cmask_n = np.zeros(n, bool)
         cmask_n[C] = True
-        Al, Bl, Fl, Gl = [], [], [], []
+        Al, Bl, Fl, Gl, Rl = [], [], [], [], []
         for j in range(ns):
             for q in range(H):
                 Ed = np.zeros((ns, c.pE.nnz))
@@ -621,37 +632,51 @@ class _LowRank:
                 B = Lq[:, Cs].toarray()
                 B[Rs] = 0.0
                 Bl.append(B)
+                Rl.append(Rq)
                 Fl.append(Rq.tocsr()[Rs].toarray())
                 G = Rq[:, C].toarray()
                 G[Rs] = 0.0
                 Gl.append(G)
+        # x0 enters a step only through the nonzero columns of R0 and of the harmonic R's (for
+        # Radau the columns of E: the differential variables); march only those rows K
+        Rabs = abs(R0).tocsc()
+        for Rq in Rl:
+            Rabs = Rabs + abs(Rq)
+        K = np.union1d(np.flatnonzero(np.diff(Rabs.tocsc().indptr) > 0), C).astype(np.int64)
+        posC = np.searchsorted(K, C)
         lu = spla.splu(L0.tocsc())
         st.factorizations += 1
         P = np.zeros((N, nR))
         P[Rs, np.arange(nR)] = 1.0
-        blocks = [R0.toarray(), P] + Bl + Gl
+        nK = K.size
+        blocks = [R0.tocsc()[:, K].toarray(), P] + Bl + Gl
         Y = lu.solve(np.asfortranarray(np.hstack(blocks)))
-        W0, Wp = Y[:, :n], Y[:, n:n + nR]
-        o = n + nR
-        WB = Y[:, o:o + m * nC].reshape(N, m, nC)
-        WG = Y[:, o + m * nC:o + m * (nC + nc)].reshape(N, m, nc)
+        W0, Wp = Y[:, :nK], Y[:, nK:nK + nR]                     # W0 = L0^-1 R0[:, K]
+        o = nK + nR
+        WB = np.ascontiguousarray(Y[:, o:o + m * nC].reshape(N, m, nC).transpose(1, 0, 2))
+        WG = np.ascontiguousarray(Y[:, o + m * nC:o + m * (nC + nc)].reshape(N, m, nc)
+                                  .transpose(1, 0, 2))          # (m, N, .)
         A_all = sp.vstack(Al).tocsr() if m else sp.csr_matrix((0, N))
         out = st.out_rows(n)
-        self.n, self.m, self.nR, self.nC, self.C = n, m, nR, nC, C
+        self.n, self.m, self.nR, self.nC, self.K, self.posC = n, m, nR, nC, K, posC
         self.W0, self.Wp, self.WB, self.WG = W0, Wp, WB, WG
-        self.S3W0 = np.ascontiguousarray(W0[out])
-        self.S3Wp = np.ascontiguousarray(Wp[out])
-        self.S3WB = np.ascontiguousarray(WB[out])                # (n, m, nC)
-        self.S3WG = np.ascontiguousarray(WG[out])                # (n, m, nc)
-        self.AW0 = (A_all @ W0).reshape(m, nR, n)
+        # rows of x1: K (marching) and all n (samples outside K, the final value)
+        self.rowsets = {}
+        for key, rows in (("K", out[K]), ("all", out)):
+            self.rowsets[key] = (np.ascontiguousarray(W0[rows]), np.ascontiguousarray(Wp[rows]),
+                                 np.ascontiguousarray(WB[:, rows]),
+                                 np.ascontiguousarray(WG[:, rows]))
+        self.AW0 = (A_all @ W0).reshape(m, nR, nK)
         self.AWp = (A_all @ Wp).reshape(m, nR, nR)
-        self.AWB = (A_all @ WB.reshape(N, m * nC)).reshape(m, nR, m, nC)
-        self.AWG = (A_all @ WG.reshape(N, m * nc)).reshape(m, nR, m, nc)
+        WBt = WB.transpose(1, 0, 2).reshape(N, m * nC)
+        WGt = WG.transpose(1, 0, 2).reshape(N, m * nc)
+        self.AWB = (A_all @ WBt).reshape(m, nR, m, nC)
+        self.AWG = (A_all @ WGt).reshape(m, nR, m, nc)
         self.CW0, self.CWp = W0[Cs], Wp[Cs]
-        self.CWB, self.CWG = WB[Cs], WG[Cs]                      # (nC, m, nC), (nC, m, nc)
-        self.F = np.array(Fl).reshape(m, nR, n)
+        self.CWB, self.CWG = WB[:, Cs], WG[:, Cs]                # (m, nC, nC), (m, nC, nc)
+        self.F = np.ascontiguousarray(np.array(Fl).reshape(m, nR, n)[:, :, K])
         self.rank = nR + nC
-        st.lowrank_info.update(rank=self.rank, terms=m)
+        st.lowrank_info.update(rank=self.rank, terms=m, marched_rows=nK)
 
     def capacitance(self, beta: np.ndarray) -> np.ndarray:
         nR, nC = self.nR, self.nC
@@ -659,7 +684,7 @@ class _LowRank:
         Cm[:nR, :nR] += np.tensordot(beta, self.AWp, 1)
         Cm[:nR, nR:] += np.einsum("i,iakc,k->ac", beta, self.AWB, beta)
         Cm[nR:, :nR] += self.CWp
-        Cm[nR:, nR:] += np.tensordot(self.CWB, beta, ([1], [0]))
+        Cm[nR:, nR:] += np.tensordot(beta, self.CWB, 1)
         return Cm
 
     @staticmethod
@@ -674,36 +699,41 @@ class _LowRank:
         r, c = self._equilibrate(Cm)
         return c[:, None] * np.linalg.solve(Cm * r[:, None] * c[None, :], rhs * r[:, None])
 
-    def step(self, X: np.ndarray, beta: np.ndarray) -> np.ndarray:
+    def _terms(self, XK: np.ndarray, beta: np.ndarray):
+        """FX, XC and the Woodbury correction coefficients y of one step."""
         nR = self.nR
-        FX = np.tensordot(beta, self.F, 1) @ X
-        XC = X[self.C]
-        x1 = self.S3W0 @ X
+        FX = np.tensordot(beta, self.F, 1) @ XK
+        XC = XK[self.posC]
         if self.rank == 0:
-            return x1
-        x1 += self.S3Wp @ FX
-        x1 += np.tensordot(self.S3WG, beta, ([1], [0])) @ XC
-        aw = (np.tensordot(beta, self.AW0, 1) @ X + np.tensordot(beta, self.AWp, 1) @ FX
+            return FX, XC, None
+        aw = (np.tensordot(beta, self.AW0, 1) @ XK + np.tensordot(beta, self.AWp, 1) @ FX
               + np.einsum("i,iakc,k->ac", beta, self.AWG, beta) @ XC)
-        cw = self.CW0 @ X + self.CWp @ FX + np.tensordot(self.CWG, beta, ([1], [0])) @ XC
+        cw = self.CW0 @ XK + self.CWp @ FX + np.tensordot(beta, self.CWG, 1) @ XC
         y = self._solve(self.capacitance(beta), np.vstack([aw, cw]))
-        x1 -= self.S3Wp @ y[:nR]
-        x1 -= np.tensordot(self.S3WB, beta, ([1], [0])) @ y[nR:]
+        return FX, XC, y
+
+    def step(self, XK: np.ndarray, beta: np.ndarray, rows: str = "K") -> np.ndarray:
+        """x1 on the rows K (rows="K") or on all n rows (rows="all") from x0 on the rows K."""
+        W0, Wp, WB, WG = self.rowsets[rows]
+        FX, XC, y = self._terms(XK, beta)
+        x1 = W0 @ XK
+        if y is None:
+            return x1
+        nR = self.nR
+        x1 += Wp @ FX
+        x1 += np.tensordot(beta, WG, 1) @ XC
+        x1 -= Wp @ y[:nR]
+        x1 -= np.tensordot(beta, WB, 1) @ y[nR:]
         return x1
 
     def stage_solution(self, X: np.ndarray, beta: np.ndarray) -> np.ndarray:
         """The full stage solution L(t)^{-1} R(t) X (N x d) of one step (for the check)."""
-        nR = self.nR
-        FX = np.tensordot(beta, self.F, 1) @ X
-        XC = X[self.C]
-        w = self.W0 @ X + self.Wp @ FX + np.tensordot(self.WG, beta, ([1], [0])) @ XC
-        if self.rank == 0:
+        XK = X[self.K]
+        FX, XC, y = self._terms(XK, beta)
+        w = self.W0 @ XK + self.Wp @ FX + np.tensordot(beta, self.WG, 1) @ XC
+        if y is None:
             return w
-        aw = (np.tensordot(beta, self.AW0, 1) @ X + np.tensordot(beta, self.AWp, 1) @ FX
-              + np.einsum("i,iakc,k->ac", beta, self.AWG, beta) @ XC)
-        cw = self.CW0 @ X + self.CWp @ FX + np.tensordot(self.CWG, beta, ([1], [0])) @ XC
-        y = self._solve(self.capacitance(beta), np.vstack([aw, cw]))
-        return w - self.Wp @ y[:nR] - np.tensordot(self.WB, beta, ([1], [0])) @ y[nR:]
+        return w - self.Wp @ y[:self.nR] - np.tensordot(beta, self.WB, 1) @ y[self.nR:]
 
     def check(self, st: "_Stepper", X: np.ndarray, h: float, betas: np.ndarray,
               ts: np.ndarray) -> bool:
@@ -759,7 +789,9 @@ def _consistent_basis(coeffs, h: float, t_end: float, dynamic_dim: Optional[int]
     range of the last steps of the period map (so Phi Z lies in span Z up to O(h^q)).
     """
     diff = np.flatnonzero(coeffs.dae.differential)
-    Xs, f1 = _settle(coeffs, h * 1e-2, t_end, lowrank)
+    # the rank is decided by per-step factorizations (as without the low-rank path: the tail of
+    # decayed stiff components, 1e-8 .. 1e-14 s0 on fine meshes, is round-off dependent)
+    Xs, f1 = _settle(coeffs, h * 1e-2, t_end, False)
     s_small = np.linalg.svd(Xs[diff], compute_uv=False)
     d = _numerical_rank(s_small) if dynamic_dim is None else int(dynamic_dim)
     X, f2 = _settle(coeffs, h, t_end, lowrank, stepper)
@@ -1098,7 +1130,10 @@ def floquet_analysis(dae: LinearPeriodicDAE, method: str = "radau", steps: Optio
     eta0 = np.log(mus) * nb / T                     # e^{eta0 T} = lambda
     P = Xm
     P *= np.exp(-eta0[None, None, :] * tm[:, None, None])
-    C = np.fft.fft(P[:, obs_local, :], axis=0) / M  # (M, obs, modes)
+    # the observed rows as a slice when they are all the sample rows in order (no copies)
+    obs_sel = (slice(None) if np.array_equal(obs_local, np.arange(len(obs_rows)))
+               else obs_local)
+    C = np.fft.fft(P[:, obs_sel, :], axis=0) / M    # (M, obs, modes)
     energy = np.einsum("r,krm->km", w, np.abs(C) ** 2)
     kk = np.fft.fftfreq(M, 1.0 / M).astype(int)
     harm = np.zeros(len(mus), dtype=int)
@@ -1129,12 +1164,15 @@ def floquet_analysis(dae: LinearPeriodicDAE, method: str = "radau", steps: Optio
     Pm = P
     Pm *= np.exp(-1j * harm[None, None, :] * w0 * tm[:, None, None])
     # normalise: weighted RMS of p over the observed rows = 1, largest component real > 0
-    nrm = np.sqrt(np.einsum("r,mrk->k", w, np.abs(Pm[:, obs_local, :]) ** 2) / M)
+    Po = Pm[:, obs_sel, :]
+    nrm = np.sqrt(np.einsum("r,mrk->k", w, np.abs(Po) ** 2) / M)
     nrm[nrm == 0] = 1.0
     Pm /= nrm
-    flat = np.abs(Pm[:, obs_local, :]).reshape(-1, len(mus))
+    Po = Pm[:, obs_sel, :]
+    flat = np.abs(Po).reshape(-1, len(mus))
     jmax = np.argmax(flat, axis=0)
-    big = Pm[:, obs_local, :].reshape(-1, len(mus))[jmax, np.arange(len(mus))]
+    mi, ri = np.unravel_index(jmax, Po.shape[:2])
+    big = Po[mi, ri, np.arange(len(mus))]
     ph = np.where(np.abs(big) > 0, np.conj(big) / np.where(np.abs(big) > 0, np.abs(big), 1.0), 1.0)
     ph[nu:] = np.where(np.real(ph[nu:]) < 0, -1.0, 1.0)     # real eigenvectors stay real
     Pm *= ph[None, None, :]
