@@ -831,11 +831,16 @@ class StatusLine:
         while len(self._samples) > 2 and self._samples[1][0] < horizon:
             self._samples.popleft()
 
-    def real_time_factor(self) -> Optional[float]:
-        """Simulation time / wall time over the sampled window (None before two samples)."""
+    def real_time_factor(self, now: Optional[float] = None) -> Optional[float]:
+        """Simulation time / wall time over the sampled window (None before two samples).
+        When nothing new has been published for over a second, the window extends to now (a
+        stalled simulation heads to 0 instead of showing its last pace)."""
         if len(self._samples) < 2:
             return None
         (m0, t0), (m1, t1) = self._samples[0], self._samples[-1]
+        now = time.monotonic() if now is None else now
+        if now - m1 > 1.0:
+            m1 = now
         if m1 - m0 < 0.2:
             return None
         return (t1 - t0) / (m1 - m0)

@@ -153,3 +153,93 @@ def test_run_script_node_modes_ctrl_c(tmp_path):
                     pass
                 proc.wait(5)
         log.close()
+
+
+# ============================================================================ status line
+class _Stream:
+    def __init__(self, tty: bool):
+        self.tty, self.text = tty, ""
+
+    def isatty(self):
+        return self.tty
+
+    def write(self, s):
+        self.text += s
+
+    def flush(self):
+        pass
+
+
+def _fake_node(**kw):
+    from types import SimpleNamespace
+
+    base = dict(last_state=None, recorder=None, record_path="", analyses_served=0,
+                analyses_waiting=0, _failed=None, status_enabled=True)
+    base.update(kw)
+    return SimpleNamespace(**base)
+
+
+def test_status_line_content_never_nan():
+    _require_ros()
+    import math
+    from types import SimpleNamespace
+    from hawt_ros.node import StatusLine
+
+    node = _fake_node()
+    st = StatusLine(node, stream=_Stream(False))
+    assert "starting" in st.line() and "rec off" in st.line()
+
+    now = time.monotonic()
+    node.last_state = (now, 12.5, math.radians(370.0), math.radians(-1.5), 0.0123, -0.0045)
+    node.recorder = SimpleNamespace(message_count=42)
+    node.record_path = "/x/runs/hawt-1.mcap"
+    node.analyses_served, node.analyses_waiting = 2, 1
+    st._samples.extend([(now - 2.0, 10.5), (now, 12.5)])
+    line = st.line()
+    for part in ("t 12.50 s", "rtf 1.00", "teeter -1.50 deg", "yaw +10.00 deg",
+                 "tip flap +12.3 mm, lag -4.5 mm", "rec hawt-1.mcap 42 msgs",
+                 "analyses 2 (+1 running)"):
+        assert part in line, (part, line)
+
+    node.last_state = (now, float("nan"), float("inf"), float("nan"), float("nan"), -0.0)
+    node._failed = "boom"
+    line = st.line()
+    assert "nan" not in line.lower() and "inf" not in line.lower(), line
+    assert "t -- s" in line and "lag +0.0 mm" in line and "SIMULATION STOPPED" in line, line
+
+    # a stalled simulation: the achieved factor heads to 0
+    st._samples.clear()
+    st._samples.extend([(now - 12.0, 1.0), (now - 10.0, 3.0)])
+    assert st.real_time_factor(now) < 0.2
+
+
+def test_status_line_output_tty_and_plain():
+    _require_ros()
+    from hawt_ros.node import StatusLine
+
+    node = _fake_node(last_state=(time.monotonic(), 1.0, 0.0, 0.0, 0.0, 0.0))
+    tty = _Stream(True)
+    st = StatusLine(node, stream=tty)
+    assert st.tty and st.period == 0.5
+    st.show()
+    st.show()
+    assert tty.text.count("\r\x1b[K") == 2 and "\n" not in tty.text
+    st.close()
+    assert tty.text.endswith("\n") and tty.text.count("\n") == 1
+
+    plain = _Stream(False)
+    st = StatusLine(node, stream=plain)
+    assert not st.tty and st.period == 5.0
+    st.show()
+    assert plain.text.startswith("hawt | t 1.00 s") and plain.text.endswith("\n")
+    assert "\r" not in plain.text and "\x1b" not in plain.text
+
+    class Broken(_Stream):
+        def write(self, s):
+            raise BrokenPipeError()
+
+    st = StatusLine(node, stream=Broken(True)).start()
+    time.sleep(0.7)
+    t0 = time.monotonic()
+    st.close()
+    assert time.monotonic() - t0 < 1.5
