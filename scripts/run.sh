@@ -24,6 +24,11 @@ if [ "${1:-}" = "modes" ]; then          # the offline table: `hawt modes`
   shift
   exec "$venv/bin/hawt" modes "$@"
 fi
+if [ "${1:-}" = "-h" ] || [ "${1:-}" = "--help" ]; then
+  sed -n '2,/^set -euo/p' "${BASH_SOURCE[0]}" | sed '$d' | sed 's/^# \{0,1\}//'
+  echo
+  exec "$venv/bin/hawt-node" --help
+fi
 
 # ROS 2: discovery on this machine only unless the user chose otherwise; rcl logs in a
 # temporary folder instead of ~/.ros.
