@@ -474,6 +474,13 @@ class TurbineModel:
         scale = max(1.0, np.abs(self.residual(z, self.initial_guess(), 0.0)).max())
         return all(np.abs(self.residual(z, y, t)).max() <= tol * scale for t in times)
 
+    @staticmethod
+    def ignorable_columns(J, rtol=1e-12) -> np.ndarray:
+        """Columns of dR/dy that vanish (to round-off relative to the largest entry): the
+        ignorable coordinates, e.g. a free yaw angle without a spring."""
+        colmax = np.abs(sp.csc_matrix(J)).max(axis=0).toarray().ravel()
+        return np.flatnonzero(colmax <= rtol * max(colmax.max(initial=0.0), 1e-300))
+
     def steady_state(self, tol=1e-10) -> np.ndarray:
         """The steady state, constant in the rotating frame (no gravity, symmetric rotor).
 
@@ -486,13 +493,19 @@ class TurbineModel:
 
         def jac(y):
             J = sp.csc_matrix(self.jacobians(z, y, 0.0)[0])
-            colmax = np.abs(J).max(axis=0).toarray().ravel()
-            empty = np.flatnonzero(colmax == 0)
-            if len(empty):  # pin ignorable coordinates (zero columns)
+            # pin exactly-zero columns (otherwise singular); a column that vanishes only to
+            # round-off is left to the pivoting LU and reset below
+            empty = self.ignorable_columns(J, rtol=0.0)
+            if len(empty):
                 J = J + sp.csc_matrix((np.ones(len(empty)), (empty, empty)), shape=J.shape)
             return J
 
-        y, _ = newton(fun, jac, self.initial_guess(), tol=tol, what="turbine steady state")
+        y0 = self.initial_guess()
+        y, _ = newton(fun, jac, y0, tol=tol, what="turbine steady state")
+        # the regularized Newton steps move an ignorable coordinate arbitrarily (it absorbs the
+        # kinematic row's residual); the residual does not depend on it: put it back
+        ignorable = self.ignorable_columns(self.jacobians(z, y, 0.0)[0])
+        y[ignorable] = y0[ignorable]
         if not self.is_time_invariant_at(y):
             raise ValueError("steady state: this configuration (gravity, tilt or an asymmetric "
                              "rotor) has a periodic steady state, not a constant one; use the "

@@ -15,6 +15,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import warnings
+
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spl
@@ -42,6 +44,8 @@ class PeriodicSteadyState:
     period: float
     iterations: int
     constant: bool = False
+    harmonics: int = 0
+    interpolation_error: float = 0.0
 
     def at(self, t: float) -> np.ndarray:
         if self.constant:
@@ -64,10 +68,13 @@ class PeriodicSteadyState:
 
 
 def periodic_steady_state(model, harmonics: int = 8, tol: float = 1e-9, max_iter: int = 25,
-                          progress=None) -> PeriodicSteadyState:
+                          progress=None, interpolation_tol: float = 1e-8,
+                          max_harmonics: int = 48) -> PeriodicSteadyState:
     """Steady state of ``model`` (a TurbineModel): the constant one when it exists (no
-    gravity, tilt or asymmetry), otherwise the periodic one by harmonic balance with
-    ``harmonics`` harmonics. Raises ConvergenceError when Newton does not converge."""
+    gravity, tilt or asymmetry), otherwise the periodic one by harmonic balance, starting with
+    ``harmonics`` harmonics and doubling them (up to ``max_harmonics``) until the residual
+    between the collocation times is below ``interpolation_tol`` relative to the load scale.
+    Raises ConvergenceError when Newton does not converge."""
     if model.rotor_speed <= 0:
         raise ValueError(f"rotor_speed: {model.rotor_speed} is not allowed for a periodic "
                          "steady state; need > 0 [rad/s]")
@@ -77,12 +84,32 @@ def periodic_steady_state(model, harmonics: int = 8, tol: float = 1e-9, max_iter
                                    iterations=0, constant=True)
     except ValueError:
         pass  # genuinely periodic
+    T = model.period
+    scale = max(1.0, np.abs(model.residual(np.zeros(model.n), model.initial_guess(), 0.0)).max())
+    guess = None
+    H = int(harmonics)
+    while True:
+        ps = _harmonic_balance(model, H, tol, max_iter, progress, guess)
+        mids = (np.arange(2 * H + 1) + 0.5) * T / (2 * H + 1)
+        err = max(np.abs(model.residual(ps.rate_at(t), ps.at(t), t)).max() for t in mids[::3])
+        ps.interpolation_error = float(err / scale)
+        if ps.interpolation_error <= interpolation_tol or 2 * H > max_harmonics:
+            if ps.interpolation_error > interpolation_tol:
+                warnings.warn(f"periodic steady state: residual between collocation times "
+                              f"{ps.interpolation_error:.1e} (relative) with {H} harmonics",
+                              RuntimeWarning, stacklevel=2)
+            return ps
+        guess, H = ps, 2 * H
+
+
+def _harmonic_balance(model, harmonics, tol, max_iter, progress, guess) -> PeriodicSteadyState:
     M = 2 * harmonics + 1
     T = model.period
     times = np.arange(M) * T / M
     D = fourier_differentiation(M, T)
     n = model.n
-    Y = np.tile(model.initial_guess(), (M, 1))
+    Y = np.tile(model.initial_guess(), (M, 1)) if guess is None \
+        else np.array([guess.at(t) for t in times])
     KD = sp.kron(sp.csr_matrix(D), sp.identity(n), format="csr")
 
     def residual(Y):
@@ -98,13 +125,19 @@ def periodic_steady_state(model, harmonics: int = 8, tol: float = 1e-9, max_iter
         if progress is not None:
             progress(min(1.0, it / max_iter), f"harmonic balance iteration {it}: residual {err:.2e}")
         if err <= tol * scale:
-            return PeriodicSteadyState(times=times, states=Y, period=T, iterations=it)
+            # ignorable coordinates (zero columns of dR/dy) are defined up to a constant:
+            # start them at their initial value (the residual does not depend on them)
+            Yd = D @ Y
+            ign = model.ignorable_columns(model.jacobians(Yd[0], Y[0], times[0])[0])
+            Y[:, ign] -= Y[0, ign] - model.initial_guess()[ign]
+            return PeriodicSteadyState(times=times, states=Y, period=T, iterations=it,
+                                       harmonics=harmonics)
         Yd = D @ Y
         jy, jd = zip(*(model.jacobians(Yd[j], Y[j], times[j]) for j in range(M)))
         Jy = sp.block_diag(jy, format="csr")
         Jd = sp.block_diag(jd, format="csr")
         J = (Jy + Jd @ KD).tocsc()
-        ignorable = np.flatnonzero(np.abs(Jy).max(axis=0).toarray().ravel() == 0)
+        ignorable = model.ignorable_columns(Jy, rtol=0.0)
         if len(ignorable):
             J = J + sp.csc_matrix((np.ones(len(ignorable)), (ignorable, ignorable)), shape=J.shape)
         try:
