@@ -452,10 +452,20 @@ def modal_analysis(turbine: Turbine, elements: Optional[int] = None,
         ok = (np.abs(fi - fr[None]) <= 1e-2 * np.maximum(1, fr[None])) & (np.abs(ri - rr[None]) <= 1e-2)
         cost = np.where(ok, np.abs(fi - fr[None]) + np.abs(ri - rr[None]), 1e6)
         pi, pj = linear_sum_assignment(cost)  # one paper mode per confirming Radau mode
-        confirmed = sorted(resolved[a] for a, b in zip(pi, pj) if ok[a, b])
-        unresolved += len(resolved) - len(confirmed)
-        resolved = np.array(confirmed, int)
-    modes = label_modes(model, fl, resolved)
+        pairs = [(resolved[a], keep[b]) for a, b in zip(pi, pj) if ok[a, b]]
+        unresolved += len(resolved) - len(pairs)
+        # labels from the Radau eigenvectors: with central differencing the unresolved mesh
+        # modes alias onto the unit circle and mix into nearly equal multipliers' eigenvectors
+        modes = label_modes(model, ref, [b for _, b in pairs])
+        for m, (a, _) in zip(modes, pairs):
+            eta = _family_exponent(model, fl, a, m.family)
+            w0 = fl.omega
+            m.frequency_per_rev, m.real_per_rev = float(eta.imag / w0), float(eta.real / w0)
+            m.frequency_hz = float(eta.imag / (2 * np.pi))
+            m.damping_ratio = float(-eta.real / abs(eta)) if abs(eta) > 1e-6 * w0 else 0.0
+            m.column = int(a)
+    else:
+        modes = label_modes(model, fl, resolved)
     modes.sort(key=lambda m: (m.frequency_per_rev, m.real_per_rev))
     _index(modes)
     settings = {"turbine": turbine.name, "elements": model.beam.N, "rotor_speed": omega,
