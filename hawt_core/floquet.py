@@ -68,7 +68,7 @@ _RADAU_RHO = _RADAU_W.sum(axis=1)
 
 DEFAULT_STEPS = {"radau": 256, "paper": 1000}
 _SETTLE_STEPS = 3
-_SETTLE_LOWRANK = True        # the settling steps with the marching step h use it too
+_SETTLE_LOWRANK = True        # the settling steps use the low-rank stage update too
 
 
 # --------------------------------------------------------------------------------------------
@@ -468,12 +468,14 @@ class _Stepper:
         else:
             if self.version != self.coeffs.version:
                 self._build()
-            R, C, cEv, cAv = _varying_cover(self.coeffs, _LOWRANK_VAR_TOL)
             n = self.coeffs.dae.n
+            R, C, cEv, cAv = _varying_cover(
+                self.coeffs, _LOWRANK_VAR_TOL,
+                None if self.lowrank else n // _LOWRANK_MAX_FRACTION)
             self.lowrank_info.update(rows=R, cols=C)
             if self.lowrank is None and (R.size + C.size) * _LOWRANK_MAX_FRACTION > n:
                 why = (f"time variation not confined to few rows/columns "
-                       f"({R.size} + {C.size} of n = {n})")
+                       f"(more than {n // _LOWRANK_MAX_FRACTION} of n = {n})")
             elif self.lowrank is None and n < _LOWRANK_MIN_N:
                 why = f"small system (n = {n} < {_LOWRANK_MIN_N}): factorizing is as fast"
             else:
@@ -550,13 +552,15 @@ _LOWRANK_MIN_N = 64           # automatic: not for smaller systems
 _LOWRANK_CHECK_TOL = 1e-7     # first step vs a factorized step (relative): gross errors
 
 
-def _varying_cover(coeffs: FourierCoefficients, tol: float):
+def _varying_cover(coeffs: FourierCoefficients, tol: float, max_size: Optional[int] = None):
     """Rows R and columns C (sorted int arrays) such that every entry of E(t), A(t) with a
     non-negligible time variation lies in a row of R or a column of C (greedy cover), and the
     harmonic coefficients (rows 1.. of cE, cA) with the negligible variations set to zero.
 
     An entry's variation is negligible when the sum of its harmonic amplitudes is at most
-    ``tol`` times the largest coefficient of its row (round-off of the FFT of a constant)."""
+    ``tol`` times the largest coefficient of its row (round-off of the FFT of a constant).
+    With ``max_size`` the greedy cover stops as soon as it has more rows + columns (then
+    R.size + C.size > max_size tells that the variation is not low-rank)."""
     n = coeffs.dae.n
     ents, cleaned = [], []
     for c, p in ((coeffs.cE, coeffs.pE), (coeffs.cA, coeffs.pA)):
@@ -571,7 +575,7 @@ def _varying_cover(coeffs: FourierCoefficients, tol: float):
     r = np.concatenate([e[0] for e in ents]) if ents else np.zeros(0, np.int64)
     cc = np.concatenate([e[1] for e in ents]) if ents else np.zeros(0, np.int64)
     R, C = [], []
-    while r.size:
+    while r.size and (max_size is None or len(R) + len(C) <= max_size):
         ur, nr = np.unique(r, return_counts=True)
         uc, nc = np.unique(cc, return_counts=True)
         if nr.max() >= nc.max():
@@ -789,9 +793,10 @@ def _consistent_basis(coeffs, h: float, t_end: float, dynamic_dim: Optional[int]
     range of the last steps of the period map (so Phi Z lies in span Z up to O(h^q)).
     """
     diff = np.flatnonzero(coeffs.dae.differential)
-    # the rank is decided by per-step factorizations (as without the low-rank path: the tail of
-    # decayed stiff components, 1e-8 .. 1e-14 s0 on fine meshes, is round-off dependent)
-    Xs, f1 = _settle(coeffs, h * 1e-2, t_end, False)
+    # with the low-rank path when it applies: per-step sparse LUs of these stage matrices
+    # leave round-off at 1e-8 .. 1e-10 s0 (the turbine: d and the "no clear gap" warning then
+    # depend on the fill-reducing ordering), the low-rank steps at 1e-11 .. 1e-12 s0
+    Xs, f1 = _settle(coeffs, h * 1e-2, t_end, lowrank)
     s_small = np.linalg.svd(Xs[diff], compute_uv=False)
     d = _numerical_rank(s_small) if dynamic_dim is None else int(dynamic_dim)
     X, f2 = _settle(coeffs, h, t_end, lowrank, stepper)
@@ -810,15 +815,19 @@ def _consistent_basis(coeffs, h: float, t_end: float, dynamic_dim: Optional[int]
 
 def _numerical_rank(s: np.ndarray, min_gap_decades: float = 4.0) -> int:
     """Rank at the largest gap in log10(s) at least min_gap_decades wide whose lower side is
-    below 1e-6 s[0] (the nonzero singular values of the near-projector are >= ~1) and whose
-    upper side is above 1e-12 s[0]: gaps inside the round-off tail (the annihilated
-    components, ~1e-20 .. 1e-30 s[0] with exact Jacobians) are not a rank."""
+    below 1e-6 s[0] (the nonzero singular values of the near-projector are >= ~1), or at least
+    3 decades wide with the lower side below 10^-10.5 s[0], and whose upper side is above
+    1e-12 s[0]: gaps inside the round-off tail (the annihilated components, ~1e-20 .. 1e-30
+    s[0] with exact Jacobians) are not a rank."""
     if s.size == 0 or s[0] == 0:
         return 0
     ls = np.log10(np.maximum(s / s[0], 1e-300))
     gaps = ls[:-1] - ls[1:]
+    # a gap of >= min_gap_decades below 1e-6, or of >= 3 decades into the round-off floor
+    # (< 10^-10.5 s0: stiff components decayed to ~1e-8 s0 leave less than 4 decades)
     cand = [(g, i) for i, g in enumerate(gaps)
-            if g >= min_gap_decades and ls[i + 1] < -6.0 and ls[i] > -12.0]
+            if ls[i] > -12.0 and ((g >= min_gap_decades and ls[i + 1] < -6.0)
+                                  or (g >= 3.0 and ls[i + 1] < -10.5))]
     if not cand:
         if ls[-1] < -10.0:
             warnings.warn("consistent subspace: no clear rank gap in the settling map; "
