@@ -363,6 +363,23 @@ class Simulator:
         if hasattr(model, "sparsity"):
             self._colour = ColouredJacobian(model.sparsity())
         self._col_factor = np.where(self.diff, 0.5, 1.0)
+        self._di = np.flatnonzero(self.diff)
+        self._ai = np.flatnonzero(self.alg)
+        #: running scaled errors of the degree-0/1/2 predictors (differential, algebraic)
+        self._pred_err = {"d": [np.inf] * 3, "a": [np.inf] * 3}
+        self._cands = None
+        #: last measured contraction [theta, first correction of that step, steps since]
+        self._theta_meas = [None, 1.0, 0]
+        self._theta = 0.0
+        self._iter_cost = 0.0            # wall time of one Newton iteration (running mean)
+        self._refresh_cost = 0.0         # wall time of the last Jacobian + factorization
+        self._extra_since_refresh = 0.0  # time spent on extra iterations since then
+        self._its_fresh = None           # iterations of the first step after a refresh
+        self._pending = None             # "update" or "refresh" before the next step
+        self._upd_fresh = False
+        self._update_cost = 0.0
+        self._its_after_update = self._its_after_refresh = None
+        self._setup_low_rank()
         self._init_outputs()
         if self.record:
             self._hist = []
@@ -556,36 +573,136 @@ class Simulator:
                 "residual_evaluations": self.residual_evaluations,
                 "jacobian_evaluations": self.jacobian_evaluations,
                 "factorizations": self.factorizations, "rejected_steps": self.rejected_steps,
+                "low_rank_updates": self.low_rank_updates,
                 "step_seconds": self.h, "step_deg": math.degrees(self.h * self.omega),
                 "unknowns": self.n}
 
     # ------------------------------------------------------------------ the step
     def _G(self, x, yn, tm, h):
         """Midpoint residual of the step unknowns x = [y_{n+1} | z_{n+1/2}] (n,)."""
-        d = self.diff
+        d = self._di
+        xd = x[d]
         ydot = np.zeros(x.shape, dtype=x.dtype)
-        ydot[d] = (x[d] - yn) / h
+        ydot[d] = (xd - yn) / h
         ym = x.copy()
-        ym[d] = 0.5 * (x[d] + yn)
+        ym[d] = 0.5 * (xd + yn)
         return self.model.residual(ydot, ym, tm)
 
     def _refresh_jacobian(self, x, yn, tm, h):
-        """Exact Newton matrix dG/dx at x: one coloured complex-step pass over G itself
-        (= dR/dydot / h + dR/dy / 2 on differential columns, dR/dy on algebraic ones)."""
-        if self._colour is not None:
-            J = self._colour(lambda xx: self._G(xx, yn, tm, h), x)
-        else:
-            m = self.model
-            d = self.diff
+        """Exact Newton matrix dG/dx at x (= dR/dydot / h + dR/dy / 2 on differential
+        columns, dR/dy on algebraic ones): from the model's structured Jacobians when it has
+        them (TurbineModel.jacobians: a few batched calls), else one coloured complex-step
+        pass over G itself."""
+        w0 = time.perf_counter()
+        m = self.model
+        if hasattr(m, "jacobians"):
+            d = self._di
             ydot = np.zeros(self.n)
             ydot[d] = (x[d] - yn) / h
             ym = x.copy()
             ym[d] = 0.5 * (x[d] + yn)
             Jy, Jd = (sp.csc_matrix(J) for J in m.jacobians(ydot, ym, tm))
-            J = Jd @ sp.diags(np.where(d, 1.0 / h, 0.0)) + Jy @ sp.diags(self._col_factor)
+            J = Jd @ sp.diags(np.where(self.diff, 1.0 / h, 0.0)) + Jy @ sp.diags(self._col_factor)
+        else:
+            J = self._colour(lambda xx: self._G(xx, yn, tm, h), x)
         self.jacobian_evaluations += 1
         self._jac_fresh = True
         self._factor(sp.csc_matrix(J), h)
+        self._refresh_cost = time.perf_counter() - w0
+        self._extra_since_refresh = 0.0
+
+    def _maybe_schedule_refresh(self, its):
+        """After a step with a reused matrix: schedule a refresh before the next step when
+        Newton contracts slowly (theta > refresh_contraction, or more than 4 iterations), or
+        when the time spent on iterations beyond those of the first step after the last
+        refresh exceeds the cost of a refresh (so that reuse never costs more than about twice
+        the optimum). The refresh is the low-rank update of the rigid rows and columns when
+        the model has them and the stored factorization still serves well after such an
+        update (its first step needed no more iterations than after a full refresh), else a
+        full Jacobian."""
+        low = self._rc is not None and self._J0 is not None and (
+            self._its_after_update is None or self._its_after_refresh is None
+            or self._its_after_update <= self._its_after_refresh)
+        if self._theta > self.refresh_contraction or its > 4:
+            self._pending = "update" if (low and self._theta < 0.5) else "refresh"
+            return
+        base = min(self._its_fresh, 2) if self._its_fresh is not None else 2
+        self._extra_since_refresh += max(0, its - base) * self._iter_cost
+        cost = (self._update_cost if self._update_cost else self._refresh_cost / 2) \
+            if low else self._refresh_cost
+        if self._extra_since_refresh > cost:
+            self._pending = "update" if low else "refresh"
+
+    def _solve(self, b):
+        """Solve with the stored (scaled) Newton matrix, including the low-rank update of the
+        rigid rows and columns (Woodbury) when there is one."""
+        y = self._lu.solve(b)
+        wb = self._wb
+        if wb is not None:
+            Z, Cinv, D = wb
+            t = np.concatenate([y[self._rc], D @ y[self._kc]])
+            y = y - Z @ (Cinv @ t)
+        return y
+
+    # ------------------------------------------------------------------ low-rank update
+    def _setup_low_rank(self):
+        """Index sets of the low-rank update: the rigid unknowns ``rc`` (the first
+        ``nq + nu``; their rows and columns vary with the azimuth when the yaw is free) and
+        the other columns ``kc`` the rigid rows depend on (the blades' root loads, from the
+        model's sparsity pattern)."""
+        self._wb = None
+        self._J0 = None
+        self._rc = self._kc = None
+        self.low_rank_updates = 0
+        m = self.model
+        nr = int(getattr(m, "nq", 0)) + int(getattr(m, "nu", 0))
+        if nr == 0 or not hasattr(m, "sparsity") or nr > 16:
+            return
+        P = sp.csr_matrix(m.sparsity())
+        kc = np.unique(P[:nr].indices)
+        self._rc = np.arange(nr)
+        self._kc = kc[kc >= nr]
+
+    def _low_rank_update(self, x, yn, tm, h):
+        """Replace the rigid rows and columns of the factored matrix by their exact values at
+        x (complex steps of G along the rigid unknowns and the columns of the rigid rows:
+        ``nq + nu + len(kc)`` residual evaluations instead of a full Jacobian), applied by
+        the Woodbury formula on top of the stored LU:
+        ``(J0 + U V^T)^-1 = J0^-1 - J0^-1 U (I + V^T J0^-1 U)^-1 V^T J0^-1`` with
+        ``U = [dJ[:, rc], E_rc]``, ``V^T = [E_rc^T; dJ[rc, kc]]``."""
+        w0 = time.perf_counter()
+        from .jacobian import STEP
+        rc, kc = self._rc, self._kc
+        cols = np.concatenate([rc, kc])
+        xc = x.astype(complex)
+        Jc = np.empty((self.n, len(cols)))
+        for i, j in enumerate(cols):
+            xc[j] += 1j * STEP
+            Jc[:, i] = self._G(xc, yn, tm, h).imag / STEP
+            xc[j] = x[j]
+        self.residual_evaluations += len(cols)
+        Jc *= self._row[:, None] * self._scale[cols][None, :]       # scaled like the LU
+        J0 = self._J0
+        dC = Jc[:, :len(rc)] - J0[:, rc].toarray()                    # (n, nr)
+        dR = Jc[rc, len(rc):] - J0[rc][:, kc].toarray()               # (nr, nk)
+        nr = len(rc)
+        U = np.zeros((self.n, 2 * nr))
+        U[:, :nr] = dC
+        U[rc, nr + np.arange(nr)] = 1.0
+        Z = self._lu.solve(U)
+        VZ = np.concatenate([Z[rc], dR @ Z[kc]])
+        cap = np.eye(2 * nr) + VZ
+        try:
+            Cinv = np.linalg.inv(cap)
+        except np.linalg.LinAlgError:
+            self._wb = None
+            self._lu = None
+            return
+        self._wb = (Z, Cinv, dR)
+        self.low_rank_updates += 1
+        self._upd_fresh = True
+        self._update_cost = time.perf_counter() - w0
+        self._extra_since_refresh = 0.0
 
     def _factor(self, J, h):
         J = sp.csc_matrix(J @ sp.diags(self._scale))
@@ -593,6 +710,9 @@ class Simulator:
         rmax[rmax == 0] = 1.0
         self._row = 1.0 / rmax
         J = sp.csc_matrix(sp.diags(self._row) @ J)
+        self._J0 = J if self._rc is not None else None
+        self._wb = None
+        self._base_age = 0
         try:
             self._lu = spl.splu(J)
         except RuntimeError as exc:
@@ -602,48 +722,94 @@ class Simulator:
         self.factorizations += 1
 
     def _predict(self, t1, h):
-        """Polynomial extrapolation of the grid values (differential) and midpoint values."""
+        """Polynomial extrapolation of the grid values (differential) and of the midpoint
+        values (algebraic). The degree (0, 1 or 2) is chosen per group as the one whose
+        predictions were best over the recent steps (a running mean of the scaled error):
+        quadratic for smooth motion, lower when undamped high mesh frequencies (aliased by
+        the 1 degree step) dominate; the better predictor saves Newton iterations."""
+        cands = {}
         g = self._grid[-3:]
         ts = np.array([a for a, _ in g])
-        yd = _extrapolate(ts, [b for _, b in g], t1)
+        ys = [b for _, b in g]
+        cands["d"] = [_extrapolate(ts[len(ts) - k - 1:], ys[len(ts) - k - 1:], t1)
+                      for k in range(min(3, len(ts)))]
         if self._mid:
             mids = self._mid[-3:]
-            z = _extrapolate(np.array([a for a, _ in mids]), [b for _, b in mids], t1 - h / 2)
+            tm = np.array([a for a, _ in mids])
+            zs = [b for _, b in mids]
+            cands["a"] = [_extrapolate(tm[len(tm) - k - 1:], zs[len(tm) - k - 1:], t1 - h / 2)
+                          for k in range(min(3, len(tm)))]
         else:
-            z = self._z_init.copy()
+            cands["a"] = [self._z_init.copy()]
+        self._cands = cands
         x = np.empty(self.n)
-        x[self.diff] = yd
-        x[self.alg] = z
+        for key, idx in (("d", self._di), ("a", self._ai)):
+            c = cands[key]
+            err = np.array(self._pred_err[key][:len(c)])
+            x[idx] = c[int(np.argmin(err)) if np.isfinite(err).any() else len(c) - 1]
         return x
 
+    def _score_predictors(self, x):
+        """Update the running scaled errors of the candidate predictors with the solution."""
+        for key, idx in (("d", self._di), ("a", self._ai)):
+            sc = self._scale[idx]
+            xi = x[idx]
+            for k, p in enumerate(self._cands[key]):
+                e = float(np.abs((p - xi) / sc).max()) if len(idx) else 0.0
+                old = self._pred_err[key][k]
+                self._pred_err[key][k] = e if not np.isfinite(old) else 0.8 * old + 0.2 * e
+
+    def _theta_estimate(self, dn0):
+        """Contraction rate expected for this step before its second iteration: the last
+        measured one, scaled with the size of the first correction (Newton's quadratic
+        convergence; not below half of it, the reused matrix contributes a constant part),
+        and grown by 1.5 per step since it was measured (the matrix ages)."""
+        th, dn_ref, age = self._theta_meas
+        if th is None:
+            return 1.0
+        return min(1.0, th * max(0.5, dn0 / dn_ref) * 1.5 ** age)
+
     def _newton(self, yn, tn, h, x):
+        """Simplified Newton with the stored factorization. Stopping test (Hairer & Wanner
+        IV.8): the scaled increment times theta / (1 - theta) below ``newton_tol``, theta
+        being the contraction rate; on the first iteration theta is predicted from the
+        previous steps (with a safety factor 2), so a step whose first correction is tiny
+        relative to the tolerance is accepted after ONE residual evaluation."""
         tm = tn + 0.5 * h
         tol = self.newton_tol
         sc = self._scale
-        dn_old = None
-        eta = max(self._eta, 1e-16) ** 0.8
+        dn_old = dn0 = None
+        dn = np.inf
         for it in range(self.max_iter):
+            w0 = time.perf_counter()
             G = self._G(x, yn, tm, h)
             self.residual_evaluations += 1
             if not np.all(np.isfinite(G)):
                 return None, it, np.inf, "non-finite residual"
-            dxs = self._lu.solve(self._row * G)
-            dx = dxs * sc
-            x = x - dx
+            dxs = self._solve(self._row * G)
+            x = x - dxs * sc
             self.newton_iterations += 1
             dn = float(np.abs(dxs).max())
+            self._iter_cost = 0.9 * self._iter_cost + 0.1 * (time.perf_counter() - w0) \
+                if self._iter_cost else time.perf_counter() - w0
             if not math.isfinite(dn):
                 return None, it, np.inf, "non-finite Newton increment"
-            if dn_old is not None:
+            if it == 0:
+                dn0 = dn
+                theta = self._theta_estimate(dn)
+                if theta < 0.5 and 2.0 * theta / (1 - theta) * dn <= tol:
+                    self._theta_meas[2] += 1
+                    return x, 1, dn, ""
+            else:
                 theta = dn / dn_old if dn_old > 0 else 0.0
                 if theta >= 0.9:
                     return None, it, dn, f"Newton diverging (contraction {theta:.2f})"
-                eta = theta / (1 - theta)
-                self._theta = theta
-            if (eta if it else max(eta, 1e-2)) * dn <= tol or dn <= 1e-3 * tol \
-                    or (it >= 3 and dn <= 1e-9):   # round-off floor of the residual
-
-                self._eta = eta
+                self._theta = max(self._theta, theta)
+                if it == 1 and dn0 > 0:
+                    self._theta_meas = [max(theta, 1e-16), dn0, 0]
+                if theta / (1 - theta) * dn <= tol:
+                    return x, it + 1, dn, ""
+            if dn <= 1e-3 * tol or (it >= 3 and dn <= 1e-9):   # round-off floor
                 return x, it + 1, dn, ""
             dn_old = dn
         return None, self.max_iter, dn, f"no convergence in {self.max_iter} iterations"
@@ -663,16 +829,23 @@ class Simulator:
         while True:
             t1 = tn + h
             x0 = self._predict(t1, h)
-            if self._lu is None or self._lu_h != h:
+            if self._lu is None or self._lu_h != h or self._pending == "refresh":
                 self._refresh_jacobian(x0, yn, tn + h / 2, h)
+            elif self._pending == "update":
+                self._low_rank_update(x0, yn, tn + h / 2, h)
+            self._pending = None
             self._theta = 0.0
             x, its, dn, why = self._newton(yn, tn, h, x0)
-            if x is not None and (self._theta > self.refresh_contraction or its > 4) \
-                    and not self._jac_fresh:
-                self._lu = None          # slow contraction: refresh before the next step
+            if x is not None and self._jac_fresh:
+                self._its_fresh = self._its_after_refresh = its
+            elif x is not None and self._upd_fresh:
+                self._its_fresh = self._its_after_update = its
+            elif x is not None:
+                self._maybe_schedule_refresh(its)
             if x is None and not self._jac_fresh:
                 self.rejected_steps += 1
                 self._refresh_jacobian(x0, yn, tn + h / 2, h)
+                self._its_fresh = None
                 x, its, dn, why = self._newton(yn, tn, h, x0)
             if x is not None:
                 if self.adaptive:
@@ -694,7 +867,8 @@ class Simulator:
                 f"simulation: step {self.steps + 1} from t = {tn:.6g} s (h = {h:.4g} s) failed: "
                 f"{why}; scaled residual norm at the predictor {rn:.3e}, Newton increment "
                 f"{dn:.3e} (tolerance {self.newton_tol:.1e})")
-        self._jac_fresh = False
+        self._score_predictors(x)
+        self._jac_fresh = self._upd_fresh = False
         d = self.diff
         if not np.all(np.isfinite(x)):
             raise SimulationError(f"simulation: non-finite state at step {self.steps + 1}, "

@@ -155,11 +155,12 @@ def _random_case(N, B, rng, complex_=True, nonuniform=True):
     return beam, y, yd, v, w, g, c((B, 3)), c((B, 3))
 
 
-@pytest.mark.parametrize("N,B", [(1, 1), (2, 3), (4, 2), (7, 5), (16, 2)])
+@pytest.mark.parametrize("N,B", [(1, 1), (2, 3), (4, 2), (7, 5), (16, 2), (4, 40), (16, 9)])
 def test_fast_residual_matches_reference(N, B):
     """Reference: the frozen pre-rewrite implementation above. Tolerance: 1e-12 relative to
     the largest residual entry (round-off of a different summation order), at random
-    complex states, with and without gravity and tip loads."""
+    complex states, with and without gravity and tip loads; small and large batches (the
+    two cross-product code paths)."""
     rng = np.random.default_rng(N * 100 + B)
     beam, y, yd, v, w, g, tf, tm = _random_case(N, B, rng)
     ref = ReferenceBeam(beam)
