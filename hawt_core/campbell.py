@@ -34,12 +34,15 @@ from scipy.optimize import linear_sum_assignment
 
 from .model import Turbine
 
-#: Weight of the relative frequency change in the assignment cost (tie-breaker only).
-FREQUENCY_WEIGHT = 0.05
+#: Weight of the relative frequency change (after the harmonic re-indexing found by the MAC)
+#: in the assignment cost.
+FREQUENCY_WEIGHT = 0.2
 #: Below this MAC, an assignment is refused (the mode starts a new track).
 MIN_MAC = 0.2
 #: A vector matched with a MAC below this does not become the track's reference vector.
-KEEP_MAC = 0.7
+KEEP_MAC = 0.95
+#: Largest relative frequency change accepted between a track's consecutive points.
+MAX_JUMP = 0.3
 
 CSV_COLUMNS = ("speed_rad_s", "speed_rpm", "track", "family", "symmetry", "index",
                "frequency_per_rev", "frequency_hz", "real_per_rev", "damping_ratio", "mac",
@@ -286,41 +289,60 @@ def _mac_matrix(A: np.ndarray, B: np.ndarray, max_shift: int = 0, step: int = 1)
         A, B = A[None], B[None]
     den = np.outer((np.abs(A) ** 2).sum((0, 1)), (np.abs(B) ** 2).sum((0, 1)))
     den = np.where(den > 0, den, 1.0)
-    H = A.shape[0]
-    best = np.zeros(den.shape)
-    for s in range(-max_shift, max_shift + 1):
-        if abs(s) >= H or s % max(1, step):
-            continue
-        # harmonic k of A against harmonic k + s of B
-        a = A[max(0, -s):H - max(0, s)]
-        b = B[max(0, s):H - max(0, -s)]
-        num = np.abs(np.einsum("kmp,kmq->pq", np.conj(a), b)) ** 2
-        best = np.maximum(best, num / den)
+    best, arg = _mac_shift(A, B, max_shift, step, den)
     return best
 
 
+def _mac_shift(A, B, max_shift, step, den=None):
+    """(best MAC (p, q), the re-indexing s achieving it (p, q)): harmonic k of A against
+    harmonic k + s of B, i.e. p_B = p_A e^{i s Omega t} and f_B = f_A - s per-rev."""
+    if den is None:
+        den = np.outer((np.abs(A) ** 2).sum((0, 1)), (np.abs(B) ** 2).sum((0, 1)))
+        den = np.where(den > 0, den, 1.0)
+    H = A.shape[0]
+    best = np.zeros(den.shape)
+    arg = np.zeros(den.shape, int)
+    for s in sorted(range(-max_shift, max_shift + 1), key=abs):     # ties: smallest |s|
+        if abs(s) >= H or s % max(1, step):
+            continue
+        a = A[max(0, -s):H - max(0, s)]
+        b = B[max(0, s):H - max(0, -s)]
+        val = np.abs(np.einsum("kmp,kmq->pq", np.conj(a), b)) ** 2 / den
+        better = val > best * (1 + 1e-9)
+        best = np.where(better, val, best)
+        arg = np.where(better, s, arg)
+    return best, arg
+
+
 def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
-                frequency_weight: float = FREQUENCY_WEIGHT, keep_mac: float = KEEP_MAC) -> list:
+                frequency_weight: float = FREQUENCY_WEIGHT, keep_mac: float = KEEP_MAC,
+                max_jump: float = MAX_JUMP) -> list:
     """Tracks from per-speed outputs of :func:`campbell_point` (sorted by speed).  A track's
-    reference vector is its latest one matched with MAC >= ``keep_mac``."""
+    reference vector is its latest one matched with MAC >= ``keep_mac``; an assignment is
+    refused when the MAC is below ``min_mac`` or the frequency moves by more than
+    ``max_jump`` (relative, after the allowed whole-per-rev re-indexings) from the track's
+    previous value."""
     S = len(points)
-    tracks: list = []          # dicts: label info, per-speed values, last vector and frequency
+    tracks: list = []   # dicts: label info, per-speed values, reference vector and its offset
 
     def new_track(i, m, v):
         t = {"label": m["label"], "family": m["family"], "symmetry": m["symmetry"],
-             "index": m["index"], "vals": np.full((S, 5), np.nan), "vec": v,
+             "index": m["index"], "vals": np.full((S, 6), np.nan), "vec": v, "off": 0,
              "f": m["frequency_hz"]}
         tracks.append(t)
         return t
 
-    def put(t, i, m, v, mac):
+    def put(t, i, m, v, mac, off, w):
+        # off: whole per-rev added to the reported frequency to continue the track (the
+        # harmonic re-indexing found by the MAC, accumulated from the track's first point)
         t["vals"][i] = (m["frequency_per_rev"], m["frequency_hz"], m["real_per_rev"],
-                        m["damping_ratio"], mac)
-        t["f"] = m["frequency_hz"]
+                        m["damping_ratio"], mac, off)
+        t["f"] = m["frequency_hz"] + off * w / (2 * np.pi) if np.isfinite(w) else \
+            m["frequency_hz"]
         if not mac < keep_mac:
             # a poorly matching vector (two nearly equal multipliers whose eigenvectors mix)
             # does not replace the track's reference: the next clean speed matches the clean one
-            t["vec"] = v
+            t["vec"], t["off"] = v, off
 
     # harmonic coefficients when every point has them, else the eigenvectors x(0)
     use_h = all(p.get("harmonics") is not None or not p["modes"] for p in points)
@@ -329,33 +351,36 @@ def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
     max_shift = max(MAX_HARMONIC_SHIFT, step) if use_h else 0
     for i, p in enumerate(points):
         modes = p["modes"]
-        V = p["harmonics"] if use_h and modes else p["vectors"][None]
-        V = V if modes else np.zeros((1, 0, 0), complex)
         if not modes:
             continue
+        V = p["harmonics"] if use_h else p["vectors"][None]
+        w = float(p.get("speed", np.nan))
         if not tracks:
             for j, m in enumerate(modes):
-                put(new_track(i, m, V[..., j]), i, m, V[..., j], 1.0)
+                put(new_track(i, m, V[..., j]), i, m, V[..., j], 1.0, 0, w)
             continue
         if V.shape[:-1] != tracks[0]["vec"].shape:
             raise ValueError("campbell: the eigenvectors of different speeds have different "
                              "sizes (same turbine and elements needed)")
         Tv = np.stack([t["vec"] for t in tracks], -1)
-        mac = _mac_matrix(Tv, V, max_shift, step)                     # (tracks, modes)
+        mac, sh = _mac_shift(Tv, V, max_shift, step)                  # (tracks, modes)
+        off = np.array([t["off"] for t in tracks])[:, None] + sh     # continuing offsets
         ft = np.array([t["f"] for t in tracks])
         fm = np.array([m["frequency_hz"] for m in modes])
-        rel = np.abs(ft[:, None] - fm[None, :]) / np.maximum(
-            np.maximum(np.abs(ft[:, None]), np.abs(fm[None, :])), 1e-3)
+        rev = w / (2 * np.pi) if np.isfinite(w) else 0.0
+        cont = fm[None, :] + off * rev                               # continued Hz
+        floor = 0.1 * rev if rev > 0 else 1e-3
+        rel = np.abs(cont - ft[:, None]) / np.maximum(np.abs(ft[:, None]), floor)
         cost = (1.0 - mac) + frequency_weight * np.minimum(rel, 1.0)
         ti, mj = linear_sum_assignment(cost)
         taken = set()
         for a, b in zip(ti, mj):
-            if mac[a, b] >= min_mac:
-                put(tracks[a], i, modes[b], V[..., b], float(mac[a, b]))
+            if mac[a, b] >= min_mac and rel[a, b] <= max_jump:
+                put(tracks[a], i, modes[b], V[..., b], float(mac[a, b]), int(off[a, b]), w)
                 taken.add(b)
         for j, m in enumerate(modes):
             if j not in taken:
-                put(new_track(i, m, V[..., j]), i, m, V[..., j], float("nan"))
+                put(new_track(i, m, V[..., j]), i, m, V[..., j], float("nan"), 0, w)
     speeds = np.array([float(p.get("speed", np.nan)) for p in points])
     # unique labels (a label reused by a track born later gets a suffix)
     seen = {}
@@ -366,7 +391,8 @@ def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
         if seen[lab] > 1:
             lab = f"{lab} #{seen[lab]}"
         v = t["vals"]
-        shift = unwrap_harmonics(speeds, v[:, 0])
+        # harmonics: the offsets found by the MAC; x(0) only: continuity of the values
+        shift = v[:, 5] if use_h else unwrap_harmonics(speeds, v[:, 0])
         cont = v[:, 0] + np.nan_to_num(shift)
         out.append(Track(label=lab, family=t["family"], symmetry=t["symmetry"],
                          index=t["index"], frequency_per_rev=v[:, 0], frequency_hz=v[:, 1],
