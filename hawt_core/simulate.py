@@ -607,7 +607,10 @@ class Simulator:
             J = self._colour(lambda xx: self._G(xx, yn, tm, h), x)
         self.jacobian_evaluations += 1
         self._jac_fresh = True
-        self._factor(sp.csc_matrix(J), h)
+        J = sp.csc_matrix(J)
+        if self._rc is not None:
+            self._add_snapshot(tm, h, J[:, np.concatenate([self._rc, self._kc])].toarray())
+        self._factor(J, h)
         self._refresh_cost = time.perf_counter() - w0
         self._extra_since_refresh = 0.0
 
@@ -653,6 +656,7 @@ class Simulator:
         self._wb = None
         self._J0 = None
         self._rc = self._kc = None
+        self._snaps = []
         self.low_rank_updates = 0
         m = self.model
         nr = int(getattr(m, "nq", 0)) + int(getattr(m, "nu", 0))
@@ -664,16 +668,13 @@ class Simulator:
         self._kc = kc[kc >= nr]
 
     def _low_rank_update(self, x, yn, tm, h):
-        """Replace the rigid rows and columns of the factored matrix by their exact values at
-        x (complex steps of G along the rigid unknowns and the columns of the rigid rows:
-        ``nq + nu + len(kc)`` residual evaluations instead of a full Jacobian), applied by
-        the Woodbury formula on top of the stored LU:
-        ``(J0 + U V^T)^-1 = J0^-1 - J0^-1 U (I + V^T J0^-1 U)^-1 V^T J0^-1`` with
-        ``U = [dJ[:, rc], E_rc]``, ``V^T = [E_rc^T; dJ[rc, kc]]``."""
+        """Exact rigid rows and columns of the Newton matrix at x (complex steps of G along
+        the rigid unknowns and the columns of the rigid rows: ``nq + nu + len(kc)`` residual
+        evaluations instead of a full Jacobian), stored as a snapshot; see
+        :meth:`_set_woodbury` for how the snapshots update the stored LU."""
         w0 = time.perf_counter()
         from .jacobian import STEP
-        rc, kc = self._rc, self._kc
-        cols = np.concatenate([rc, kc])
+        cols = np.concatenate([self._rc, self._kc])
         xc = x.astype(complex)
         Jc = np.empty((self.n, len(cols)))
         for i, j in enumerate(cols):
@@ -681,28 +682,59 @@ class Simulator:
             Jc[:, i] = self._G(xc, yn, tm, h).imag / STEP
             xc[j] = x[j]
         self.residual_evaluations += len(cols)
-        Jc *= self._row[:, None] * self._scale[cols][None, :]       # scaled like the LU
-        J0 = self._J0
-        dC = Jc[:, :len(rc)] - J0[:, rc].toarray()                    # (n, nr)
-        dR = Jc[rc, len(rc):] - J0[rc][:, kc].toarray()               # (nr, nk)
-        nr = len(rc)
-        U = np.zeros((self.n, 2 * nr))
-        U[:, :nr] = dC
-        U[rc, nr + np.arange(nr)] = 1.0
-        Z = self._lu.solve(U)
-        VZ = np.concatenate([Z[rc], dR @ Z[kc]])
-        cap = np.eye(2 * nr) + VZ
-        try:
-            Cinv = np.linalg.inv(cap)
-        except np.linalg.LinAlgError:
-            self._wb = None
-            self._lu = None
-            return
-        self._wb = (Z, Cinv, dR)
+        self._add_snapshot(tm, h, Jc)
         self.low_rank_updates += 1
         self._upd_fresh = True
         self._update_cost = time.perf_counter() - w0
         self._extra_since_refresh = 0.0
+
+    def _add_snapshot(self, tm, h, Jc):
+        """Keep the exact rigid rows/columns ``Jc = dG/dx[:, rc + kc]`` (unscaled) at time tm
+        (the last two)."""
+        self._snaps = [sn for sn in self._snaps[-1:] if sn["h"] == h] + \
+            [{"t": tm, "h": h, "J": Jc, "gen": -1}]
+
+    def _set_woodbury(self, t, h):
+        """Low-rank update of the stored LU for the step at midpoint time t: the rigid rows
+        and columns are replaced by their values linearly extrapolated in time from the last
+        two snapshots (exact at a snapshot; they vary with the azimuth when the yaw is free),
+        applied by the Woodbury formula
+        ``(J0 + U V^T)^-1 = J0^-1 - J0^-1 U (I + V^T J0^-1 U)^-1 V^T J0^-1`` with
+        ``U = [dJ[:, rc], E_rc]``, ``V^T = [E_rc^T; dJ[rc, kc]]`` (rank 2 (nq + nu)).
+        U and dJ are linear in the snapshot values, so J0^-1 U is formed once per snapshot and
+        LU, and each step costs a few small products and a (2 (nq+nu))^2 inverse."""
+        self._wb = None
+        snaps = [sn for sn in self._snaps if sn["h"] == h]
+        if not snaps or self._J0 is None:
+            return
+        rc, kc = self._rc, self._kc
+        nr = len(rc)
+        for sn in snaps:
+            if sn["gen"] != self.factorizations:         # (re)form against the current LU
+                cols = np.concatenate([rc, kc])
+                Js = sn["J"] * (self._row[:, None] * self._scale[cols][None, :])
+                U = np.zeros((self.n, 2 * nr))
+                U[:, :nr] = Js[:, :nr] - self._J0[:, rc].toarray()
+                U[rc, nr + np.arange(nr)] = 1.0
+                sn["Z"] = self._lu.solve(U)
+                sn["dR"] = Js[rc, nr:] - self._J0[rc][:, kc].toarray()
+                sn["gen"] = self.factorizations
+        b = snaps[-1]
+        Z, dR = b["Z"], b["dR"]
+        if len(snaps) == 2:
+            a = snaps[0]
+            span = b["t"] - a["t"]
+            if 0 < span <= 60 * h:
+                s_ = (t - b["t"]) / span
+                Z = Z + s_ * (Z - a["Z"])
+                dR = dR + s_ * (dR - a["dR"])
+        cap = np.eye(2 * nr) + np.concatenate([Z[rc], dR @ Z[kc]])
+        try:
+            Cinv = np.linalg.inv(cap)
+        except np.linalg.LinAlgError:
+            return
+        if np.all(np.isfinite(Cinv)):
+            self._wb = (Z, Cinv, dR)
 
     def _factor(self, J, h):
         J = sp.csc_matrix(J @ sp.diags(self._scale))
@@ -834,6 +866,8 @@ class Simulator:
             elif self._pending == "update":
                 self._low_rank_update(x0, yn, tn + h / 2, h)
             self._pending = None
+            if self._rc is not None:
+                self._set_woodbury(tn + h / 2, h)
             self._theta = 0.0
             x, its, dn, why = self._newton(yn, tn, h, x0)
             if x is not None and self._jac_fresh:
@@ -846,6 +880,8 @@ class Simulator:
                 self.rejected_steps += 1
                 self._refresh_jacobian(x0, yn, tn + h / 2, h)
                 self._its_fresh = None
+                if self._rc is not None:
+                    self._set_woodbury(tn + h / 2, h)
                 x, its, dn, why = self._newton(yn, tn, h, x0)
             if x is not None:
                 if self.adaptive:
