@@ -35,7 +35,7 @@ import scipy.linalg as sl
 from scipy.optimize import linear_sum_assignment
 
 from .assembly import TurbineModel
-from .blade_modes import FAMILIES, classify_energy, equilibrate
+from .blade_modes import FAMILIES, classify_energy, deflate_infinite, equilibrate
 from .floquet import LinearPeriodicDAE, floquet_analysis
 from .model import Turbine
 from .periodic import periodic_steady_state
@@ -192,6 +192,15 @@ def periodic_dae(model: TurbineModel, steady) -> LinearPeriodicDAE:
             S, nb = None, None
     return LinearPeriodicDAE(lambda t: jac(t)[0], lambda t: jac(t)[1], model.period,
                              model.differential, S=S, blades=nb)
+
+
+def dynamic_dimension(dae: LinearPeriodicDAE) -> int:
+    """Number of dynamic states (finite eigenvalues of the pencil at t = 0), found by exact
+    deflation of the infinite eigenvalues (blade_modes.deflate_infinite): the dimension of the
+    consistent subspace, independent of t, given to the Floquet marching instead of a
+    numerical rank decision (which can depend on the step size for fine meshes)."""
+    Ar, _, _ = deflate_infinite(dae.A(0.0).toarray(), dae.E(0.0).toarray())
+    return int(Ar.shape[0])
 
 
 def _display_rows(model: TurbineModel):
@@ -414,8 +423,9 @@ def modal_analysis(turbine: Turbine, elements: Optional[int] = None,
     t1 = time.perf_counter()
     rows, wts = _display_rows(model)
     # the dominant harmonic is judged on displacement-like rows weighted to tip metres
+    d = dynamic_dimension(dae)
     fl = floquet_analysis(dae, method=method, steps=steps, fast=use_fast,
-                          observed=rows, weights=wts ** 2)
+                          observed=rows, weights=wts ** 2, dynamic_dim=d)
     timings["floquet"] = time.perf_counter() - t1
     stage(0.85, "labelling modes")
     omega = model.rotor_speed
@@ -444,7 +454,7 @@ def modal_analysis(turbine: Turbine, elements: Optional[int] = None,
         # at 1: keep only the modes that an L-stable Radau IIA march (which annihilates
         # unresolved modes) confirms, within 1 % in frequency and 0.01 per-rev in real part.
         ref = floquet_analysis(dae, method="radau", steps=max(128, steps // 4), fast=use_fast,
-                               observed=rows, weights=wts ** 2)
+                               observed=rows, weights=wts ** 2, dynamic_dim=d)
         keep = [j for j in ref.modes() if abs(ref.multipliers[j]) > 1e-12]
         fr, rr = ref.frequency_per_rev[keep], ref.real_per_rev[keep]
         fi = fl.frequency_per_rev[resolved][:, None]
