@@ -490,22 +490,10 @@ class TurbineModel:
         """
         z = np.zeros(self.n)
         fun = lambda y: self.residual(z, y, 0.0)
-
-        def jac(y):
-            J = sp.csc_matrix(self.jacobians(z, y, 0.0)[0])
-            # pin exactly-zero columns (otherwise singular); a column that vanishes only to
-            # round-off is left to the pivoting LU and reset below
-            empty = self.ignorable_columns(J, rtol=0.0)
-            if len(empty):
-                J = J + sp.csc_matrix((np.ones(len(empty)), (empty, empty)), shape=J.shape)
-            return J
-
+        jac = lambda y: self.jacobians(z, y, 0.0)[0]
         y0 = self.initial_guess()
-        y, _ = newton(fun, jac, y0, tol=tol, what="turbine steady state")
-        # the regularized Newton steps move an ignorable coordinate arbitrarily (it absorbs the
-        # kinematic row's residual); the residual does not depend on it: put it back
-        ignorable = self.ignorable_columns(self.jacobians(z, y, 0.0)[0])
-        y[ignorable] = y0[ignorable]
+        ignorable = self.ignorable_columns(jac(y0))
+        y, _ = newton(fun, jac, y0, tol=tol, what="turbine steady state", fixed=ignorable)
         if not self.is_time_invariant_at(y):
             raise ValueError("steady state: this configuration (gravity, tilt or an asymmetric "
                              "rotor) has a periodic steady state, not a constant one; use the "

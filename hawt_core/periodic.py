@@ -21,7 +21,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spl
 
-from .blade_modes import ConvergenceError
+from .blade_modes import ConvergenceError, newton
 
 
 def fourier_differentiation(M: int, period: float) -> np.ndarray:
@@ -112,41 +112,25 @@ def _harmonic_balance(model, harmonics, tol, max_iter, progress, guess) -> Perio
         else np.array([guess.at(t) for t in times])
     KD = sp.kron(sp.csr_matrix(D), sp.identity(n), format="csr")
 
-    def residual(Y):
+    def residual(Yflat):
+        Y = Yflat.reshape(M, n)
         Yd = D @ Y
-        return np.concatenate([model.residual(Yd[j], Y[j], times[j]) for j in range(M)])
-
-    r = residual(Y)
-    scale = max(1.0, np.abs(r).max())
-    for it in range(max_iter):
-        if not np.all(np.isfinite(r)):
-            raise ConvergenceError(f"periodic steady state: non-finite residual at iteration {it}")
-        err = np.abs(r).max()
+        r = np.concatenate([model.residual(Yd[j], Y[j], times[j]) for j in range(M)])
         if progress is not None:
-            progress(min(1.0, it / max_iter), f"harmonic balance iteration {it}: residual {err:.2e}")
-        if err <= tol * scale:
-            # ignorable coordinates (zero columns of dR/dy) are defined up to a constant:
-            # start them at their initial value (the residual does not depend on them)
-            Yd = D @ Y
-            ign = model.ignorable_columns(model.jacobians(Yd[0], Y[0], times[0])[0])
-            Y[:, ign] -= Y[0, ign] - model.initial_guess()[ign]
-            return PeriodicSteadyState(times=times, states=Y, period=T, iterations=it,
-                                       harmonics=harmonics)
+            progress(0.5, f"harmonic balance ({harmonics} harmonics): residual {np.abs(r).max():.2e}")
+        return r
+
+    def jacobian(Yflat):
+        Y = Yflat.reshape(M, n)
         Yd = D @ Y
         jy, jd = zip(*(model.jacobians(Yd[j], Y[j], times[j]) for j in range(M)))
-        Jy = sp.block_diag(jy, format="csr")
-        Jd = sp.block_diag(jd, format="csr")
-        J = (Jy + Jd @ KD).tocsc()
-        ignorable = model.ignorable_columns(Jy, rtol=0.0)
-        if len(ignorable):
-            J = J + sp.csc_matrix((np.ones(len(ignorable)), (ignorable, ignorable)), shape=J.shape)
-        try:
-            dY = spl.splu(J).solve(r)
-        except RuntimeError as exc:
-            raise ConvergenceError(f"periodic steady state: singular Jacobian at iteration {it} "
-                                   f"({exc})") from exc
-        Y = Y - dY.reshape(M, n)
-        r = residual(Y)
-    raise ConvergenceError(f"periodic steady state: harmonic balance did not converge in "
-                           f"{max_iter} iterations (max residual {np.abs(r).max():.3e}, "
-                           f"tolerance {tol * scale:.3e})")
+        return (sp.block_diag(jy, format="csr") + sp.block_diag(jd, format="csr") @ KD).tocsc()
+
+    # ignorable coordinates (a free yaw angle) are defined up to a constant: hold them at
+    # their value at t = 0 (bordered Newton steps, see blade_modes.newton)
+    ign = model.ignorable_columns(model.jacobians(np.zeros(n), Y[0], times[0])[0])
+    Yflat, it = newton(residual, jacobian, Y.ravel(), tol=tol, max_iter=max_iter,
+                       what=f"periodic steady state (harmonic balance, {harmonics} harmonics)",
+                       fixed=ign)
+    return PeriodicSteadyState(times=times, states=Yflat.reshape(M, n), period=T, iterations=it,
+                               harmonics=harmonics)

@@ -117,3 +117,29 @@ def test_steady_state_root_tension_and_time_invariance():
         assert y[m.layout.blade(k).root_force[0]] == pytest.approx(ref, rel=1e-9)
         assert np.abs(y[m.layout.blade(k).u[1:]]).max() < 1e-12
     assert m.is_time_invariant_at(y)
+
+
+@pytest.mark.parametrize("speed", [3.99, 4.0, 6.02, 8.0])
+def test_steady_state_with_the_ignorable_yaw_angle(speed):
+    """Free yaw, no spring: the yaw angle is ignorable (its column of dR/dy vanishes, so the
+    Newton matrix is singular). The bordered Newton steps converge at every speed (4.0 rad/s
+    used to diverge) and leave the yaw angle at 0 exactly; residual below 1e-9 of the loads."""
+    m = TurbineModel(load_turbine(), elements=2, rotor_speed=speed)
+    y = m.steady_state()
+    assert y[m.layout["yaw"]] == 0.0
+    scale = np.abs(m.residual(np.zeros(m.n), m.initial_guess(), 0.0)).max()
+    assert np.abs(m.residual(np.zeros(m.n), y, 0.3)).max() <= 1e-9 * scale
+
+
+def test_periodic_steady_state_free_yaw_gravity():
+    """Gravity and a free yaw: the periodic steady state by harmonic balance; the harmonics
+    are raised until the residual BETWEEN the collocation times is below 1e-8 of the loads
+    (an independent check of the interpolated solution); yaw angle 0 at t = 0."""
+    from hawt_core.periodic import periodic_steady_state
+    T = load_turbine()
+    m = TurbineModel(dc.replace(T, gravity=Gravity(True, 9.81)), elements=2)
+    ps = periodic_steady_state(m, harmonics=8)
+    scale = np.abs(m.residual(np.zeros(m.n), m.initial_guess(), 0.0)).max()
+    for t in np.linspace(0, m.period, 7)[:-1] + 0.013:
+        assert np.abs(m.residual(ps.rate_at(t), ps.at(t), t)).max() <= 1e-8 * scale
+    assert ps.states[0, m.layout["yaw"]] == pytest.approx(0.0, abs=1e-15)
