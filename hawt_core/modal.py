@@ -45,6 +45,8 @@ DEFAULT_STEPS = {"radau": 400, "paper": 1000}
 #: Resolution limit: reported frequencies below steps / this (per-rev over a full period).
 STEPS_PER_CYCLE = {"radau": 8.0, "paper": 12.0}
 MAX_STEPS = 1_000_000
+#: Most samples of the periodic eigenvectors per period (memory: samples x rows x modes).
+MAX_SAMPLES = 512
 
 
 class Cancelled(RuntimeError):
@@ -424,12 +426,15 @@ def modal_analysis(turbine: Turbine, elements: Optional[int] = None,
     rows, wts = _display_rows(model)
     # the dominant harmonic is judged on displacement-like rows weighted to tip metres
     d = dynamic_dimension(dae)
-    fl = floquet_analysis(dae, method=method, steps=steps, fast=use_fast,
+    # samples of the periodic eigenvectors per period: the dominant harmonic is resolved up
+    # to samples / 2 per-rev, so the reported band is also capped at samples / 2.5
+    samples = int(min(MAX_SAMPLES, max(128, 2 ** np.ceil(np.log2(2.5 * steps / STEPS_PER_CYCLE[method])))))
+    fl = floquet_analysis(dae, method=method, steps=steps, fast=use_fast, samples=samples,
                           observed=rows, weights=wts ** 2, dynamic_dim=d)
     timings["floquet"] = time.perf_counter() - t1
     stage(0.85, "labelling modes")
     omega = model.rotor_speed
-    limit = steps / STEPS_PER_CYCLE[method]
+    limit = min(steps / STEPS_PER_CYCLE[method], samples / 2.5)
     lam0, X0 = _averaged_modes(dae, rows, wts, omega)
     resolved = []
     unresolved = 0
