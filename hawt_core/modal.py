@@ -349,9 +349,9 @@ def _family_exponent(model: TurbineModel, fl, i: int, family: str) -> complex:
         rows = [pos[r] for r, _ in sel if r in pos]
         wts = np.array([w for r, w in sel if r in pos])
     else:
-        return complex(fl.exponents[i])
+        return _nonnegative(complex(fl.exponents[i]))
     if not rows:
-        return complex(fl.exponents[i])
+        return _nonnegative(complex(fl.exponents[i]))
     P = fl.periodic_samples[:, rows, i]
     if wts is not None:
         P = P * wts[None, :]
@@ -362,7 +362,13 @@ def _family_exponent(model: TurbineModel, fl, i: int, family: str) -> complex:
     cand = np.flatnonzero(energy >= energy.max() * (1 - 1e-6))
     freqs = eta.imag + k[cand] * fl.omega
     best = min(range(len(cand)), key=lambda j: (freqs[j] < -1e-9 * fl.omega, abs(freqs[j])))
-    return eta + 1j * k[cand[best]] * fl.omega
+    return _nonnegative(eta + 1j * k[cand[best]] * fl.omega)
+
+
+def _nonnegative(eta: complex) -> complex:
+    """The member of a conjugate pair with a non-negative frequency (the system is real: the
+    conjugate mode has the conjugate exponent and the opposite dominant harmonic)."""
+    return eta.conjugate() if eta.imag < 0 else eta
 
 
 def _blade_symmetry(bvecs):
