@@ -88,6 +88,17 @@ def tip_basis(theta) -> np.ndarray:
     return ((1 - s) * np.eye(3) + sk + 0.5 * np.outer(th, th)) / (1 + s)
 
 
+
+def _cross(a, b):
+    """Cross product on the last axis with broadcasting (complex-safe; for 3-vectors several
+    times faster than np.cross, which dominates the cost of this module otherwise)."""
+    a = np.asarray(a)
+    b = np.asarray(b)
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack(np.broadcast_arrays(a1 * b2 - a2 * b1, a2 * b0 - a0 * b2,
+                                        a0 * b1 - a1 * b0), -1)
+
 def _rotation(axis: int, a) -> np.ndarray:
     c = np.cos(a)
     s = np.sin(a)
@@ -234,7 +245,19 @@ class RigidSystem:
         return out
 
     def _kin(self, q, u, t):
-        """Velocities, partial velocities and their ingredients, all in N."""
+        """Velocities, partial velocities and their ingredients, all in N (the last result is
+        cached: one residual evaluation asks for it twice, root motion and dynamics; callers
+        treat the returned dict as read-only)."""
+        q, u = np.asarray(q), np.asarray(u)
+        key = (q.dtype.str, q.tobytes(), u.dtype.str, u.tobytes(), complex(t))
+        cached = getattr(self, "_kin_cache", None)
+        if cached is not None and cached[0] == key:
+            return cached[1]
+        out = self._kin_uncached(q, u, t)
+        self._kin_cache = (key, out)
+        return out
+
+    def _kin_uncached(self, q, u, t):
         qy, qh = self._split(q, self.n_q)
         U1, U2 = self._split(u, self.n_u)
         fr = self.frames(q, t)
@@ -251,11 +274,11 @@ class RigidSystem:
         wr_S = np.array([y1, 0.0 * h2])
         w_H = wr_H[0] * U1 + wr_H[1] * U2 + self.omega0 * s3
         # partial velocities of SH (teeter-axis point) and of the root points
-        vr_SH = np.array([self.d * np.cross(y1, s3), 0.0 * s3])
+        vr_SH = np.array([self.d * _cross(y1, s3), 0.0 * s3])
         v_SH = vr_SH[0] * U1
         rho = self.root_offset_hub @ H.T                       # (Nb, 3) in N
-        vr_P = vr_SH[:, None, :] + np.cross(wr_H[:, None, :], rho[None, :, :])   # (2, Nb, 3)
-        v_P = v_SH[None, :] + np.cross(w_H[None, :], rho)
+        vr_P = vr_SH[:, None, :] + _cross(wr_H[:, None, :], rho[None, :, :])   # (2, Nb, 3)
+        v_P = v_SH[None, :] + _cross(w_H[None, :], rho)
         return dict(qy=qy, qh=qh, U1=U1, U2=U2, fr=fr, y1=y1, s3=s3, h2=h2, y1h2=y1h2,
                     w_Y=w_Y, w_S=w_S, w_H=w_H, wr_H=wr_H, wr_S=wr_S,
                     vr_SH=vr_SH, v_SH=v_SH, vr_P=vr_P, v_P=v_P, rho=rho)
@@ -298,16 +321,16 @@ class RigidSystem:
         w_H = w_T + wr1 * U1 + wr2 * U2 + self.omega0 * s3
         r_SH = self.d * s3
         r_c = Y @ self.nacelle_cg
-        v_SH = v_T + np.cross(w_Y, r_SH)
+        v_SH = v_T + _cross(w_Y, r_SH)
         rho = self.root_offset_hub @ H.T                       # (Nb, 3) in N
-        v_P = v_SH[None, :] + np.cross(w_H[None, :], rho)
+        v_P = v_SH[None, :] + _cross(w_H[None, :], rho)
         b = [Tt[:, j] for j in range(3)]                       # tower-top basis in N
         wr_Y = np.array([y1, z, z, z, z] + b)
         wr_H = np.array([wr1, wr2, z, z, z] + b)
         wr_S = np.array([y1, z, z, z, z] + b)
-        vr_SH = np.array([np.cross(y1, r_SH), z] + b + [np.cross(bj, r_SH) for bj in b])
-        vr_c = np.array([np.cross(y1, r_c), z] + b + [np.cross(bj, r_c) for bj in b])
-        vr_P = vr_SH[:, None, :] + np.cross(wr_H[:, None, :], rho[None, :, :])   # (8, Nb, 3)
+        vr_SH = np.array([_cross(y1, r_SH), z] + b + [_cross(bj, r_SH) for bj in b])
+        vr_c = np.array([_cross(y1, r_c), z] + b + [_cross(bj, r_c) for bj in b])
+        vr_P = vr_SH[:, None, :] + _cross(wr_H[:, None, :], rho[None, :, :])   # (8, Nb, 3)
         return dict(qy=qy, qh=qh, U1=U1, U2=U2, fr=fr, tw=tw, Tt=Tt, y1=y1, s3=s3, h2=h2,
                     y1h2=y1h2, w_T=w_T, v_T=v_T, w_Y=w_Y, w_H=w_H, wr1=wr1, wr2=wr2,
                     r_SH=r_SH, r_c=r_c, v_SH=v_SH, v_P=v_P, rho=rho, wr_Y=wr_Y, wr_H=wr_H,
@@ -324,11 +347,11 @@ class RigidSystem:
         Y, H, B = k["fr"]["Y"], k["fr"]["H"], k["fr"]["B"]
         # --- accelerations (tower top: a_T = T (Vdot + Omega x V), alpha_T = T Omegadot)
         alpha_T = Tt @ tw[4]
-        a_T = Tt @ tw[3] + np.cross(w_T, v_T)
-        y1dot = np.cross(w_T, y1)
+        a_T = Tt @ tw[3] + _cross(w_T, v_T)
+        y1dot = _cross(w_T, y1)
         alpha_Y = alpha_T + Ud1 * y1 + U1 * y1dot
-        s3dot = np.cross(w_Y, s3)
-        h2dot = np.cross(w_H, h2)
+        s3dot = _cross(w_Y, s3)
+        h2dot = _cross(w_H, h2)
         if self.teeter:
             wr1dot = y1dot - ((y1dot @ h2 + y1 @ h2dot) * h2 + k["y1h2"] * h2dot)
             wr2dot = h2dot
@@ -338,13 +361,13 @@ class RigidSystem:
         alpha_H = (alpha_T + k["wr1"] * Ud1 + k["wr2"] * Ud2 + wr1dot * U1 + wr2dot * U2
                    + self.omega0 * s3dot)
         r_SH, r_c = k["r_SH"], k["r_c"]
-        a_SH = a_T + np.cross(alpha_Y, r_SH) + np.cross(w_Y, np.cross(w_Y, r_SH))
-        a_c = a_T + np.cross(alpha_Y, r_c) + np.cross(w_Y, np.cross(w_Y, r_c))
+        a_SH = a_T + _cross(alpha_Y, r_SH) + _cross(w_Y, _cross(w_Y, r_SH))
+        a_c = a_T + _cross(alpha_Y, r_c) + _cross(w_Y, _cross(w_Y, r_c))
         # --- generalized inertia forces (hub at SH, nacelle at its mass centre)
         I_H = H @ self.hub_inertia @ H.T
         I_Y = Y @ self.nacelle_inertia @ Y.T
-        T_H = -(I_H @ alpha_H + np.cross(w_H, I_H @ w_H))
-        T_Y = -(I_Y @ alpha_Y + np.cross(w_Y, I_Y @ w_Y))
+        T_H = -(I_H @ alpha_H + _cross(w_H, I_H @ w_H))
+        T_Y = -(I_Y @ alpha_Y + _cross(w_Y, I_Y @ w_Y))
         Fstar = (k["wr_H"] @ T_H + k["vr_SH"] @ (-self.hub_mass * a_SH)
                  + k["wr_Y"] @ T_Y + k["vr_c"] @ (-self.nacelle_mass * a_c))
         # --- generalized active forces
@@ -454,8 +477,8 @@ class RigidSystem:
             raise ValueError(f"root loads must have shape ({nb}, 3)")
 
         # --- accelerations
-        h2dot = np.cross(w_H, h2)
-        s3dot = np.cross(w_Y, s3)
+        h2dot = _cross(w_H, h2)
+        s3dot = _cross(w_Y, s3)
         if self.teeter:
             wr1dot = -((y1 @ h2dot) * h2 + k["y1h2"] * h2dot)
             wr2dot = h2dot
@@ -464,11 +487,11 @@ class RigidSystem:
             wr2dot = 0.0 * h2
         alpha_H = (wr_H[0] * Ud1 + wr_H[1] * Ud2 + wr1dot * U1 + wr2dot * U2
                    + self.omega0 * s3dot)
-        a_SH = self.d * (np.cross(y1, s3) * Ud1 + np.cross(y1, s3dot) * U1)
+        a_SH = self.d * (_cross(y1, s3) * Ud1 + _cross(y1, s3dot) * U1)
 
         # --- generalized inertia forces
         I_H = H @ self.hub_inertia @ H.T
-        T_star = -(I_H @ alpha_H + np.cross(w_H, I_H @ w_H))
+        T_star = -(I_H @ alpha_H + _cross(w_H, I_H @ w_H))
         R_star = -self.hub_mass * a_SH
         Fstar = wr_H @ T_star + k["vr_SH"] @ R_star
         Fstar = Fstar + np.array([-self.nacelle_yaw_inertia * Ud1, 0.0 * Ud1])
@@ -506,7 +529,7 @@ class RigidSystem:
             k = self._kin_tower(q, u, t, tower)
             H, Y = k["fr"]["H"], k["fr"]["Y"]
             wH, wY = k["w_H"], k["w_Y"]
-            v_c = k["v_T"] + np.cross(wY, k["r_c"])
+            v_c = k["v_T"] + _cross(wY, k["r_c"])
             I_H = H @ self.hub_inertia @ H.T
             I_Y = Y @ self.nacelle_inertia @ Y.T
             return (0.5 * (wH @ (I_H @ wH)) + 0.5 * self.hub_mass * (k["v_SH"] @ k["v_SH"])
