@@ -65,6 +65,16 @@ def _rotor_speed(text: str) -> float:
     return v
 
 
+def _model_args(p):
+    """The arguments every analysis takes: the turbine file and the usual overrides."""
+    p.add_argument("turbine", nargs="?", default=None, metavar="TURBINE",
+                   help="turbine YAML file (default: the paper's Table 1 turbine)")
+    p.add_argument("--elements", "-n", type=_positive_int, default=None, metavar="N",
+                   help="finite elements per blade (default: the turbine file's)")
+    p.add_argument("--rotor-speed", type=_rotor_speed, default=None, metavar="RAD_PER_S",
+                   help="rotor speed [rad/s] (default: the turbine file's)")
+
+
 def _load(path):
     """The turbine of ``path`` (None: the paper's Table 1 turbine)."""
     from .io import load_turbine
@@ -95,12 +105,7 @@ def cmd_blade_modes(args) -> int:
 
 @cmd_blade_modes.arguments
 def _blade_modes_args(p):
-    p.add_argument("turbine", nargs="?", default=None, metavar="TURBINE",
-                   help="turbine YAML file (default: the paper's Table 1 turbine)")
-    p.add_argument("--elements", "-n", type=_positive_int, default=None, metavar="N",
-                   help="finite elements per blade (default: the turbine file's)")
-    p.add_argument("--rotor-speed", type=_rotor_speed, default=None, metavar="RAD_PER_S",
-                   help="rotor speed [rad/s] (default: the turbine file's)")
+    _model_args(p)
     p.add_argument("--count", type=_positive_int, default=None,
                    help="number of lowest modes (default: all, or 30 for large models)")
     p.add_argument("--method", choices=("auto", "dense", "sparse"), default="auto",
@@ -167,12 +172,7 @@ def cmd_modes(args) -> int:
 
 @cmd_modes.arguments
 def _modes_args(p):
-    p.add_argument("turbine", nargs="?", default=None, metavar="TURBINE",
-                   help="turbine YAML file (default: the paper's Table 1 turbine)")
-    p.add_argument("--elements", "-n", type=_positive_int, default=None, metavar="N",
-                   help="finite elements per blade (default: the turbine file's)")
-    p.add_argument("--rotor-speed", type=_rotor_speed, default=None, metavar="RAD_PER_S",
-                   help="rotor speed [rad/s] (default: the turbine file's)")
+    _model_args(p)
     p.add_argument("--steps", type=_steps, default=None, metavar="K",
                    help="time steps per rotor period (default: 400 radau, 1000 paper)")
     p.add_argument("--method", choices=("radau", "paper"), default="radau",

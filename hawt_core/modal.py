@@ -109,25 +109,15 @@ class ModalResult:
 
     def table(self) -> str:
         s = self.settings
-        lines = [f"Dominant frequencies of the turbine '{s['turbine']}' (Floquet, {s['method']}, "
-                 f"{s['steps']} steps/period{', fast Floquet' if s['fast'] else ''}), "
-                 f"{s['elements']} elements per blade, rotor speed {s['rotor_speed']:.4g} rad/s",
-                 f"{'mode':<30}{'eigenvalue (per-rev)':>28}{'Hz':>11}{'damping':>11}"]
-        for m in self.modes:
-            name = (f"{m.family}" if m.family in ("yaw", "teeter")
-                    else f"{_ordinal(m.index)} {(m.symmetry or '')} {m.family}".replace("  ", " "))
-            if abs(m.frequency_per_rev) < 5e-7 and abs(m.real_per_rev) < 5e-7:
-                ev = "0"
-            elif abs(m.frequency_per_rev) < 5e-7:
-                ev = f"{m.real_per_rev:+.6f}"
-            else:
-                ev = f"{m.real_per_rev:+.6f} ± {m.frequency_per_rev:.6f} i"
-            lines.append(f"{name:<30}{ev:>28}{m.frequency_hz:>11.5f}{m.damping_ratio:>11.2e}")
+        header = (f"Dominant frequencies of the turbine '{s['turbine']}' (Floquet, {s['method']}, "
+                  f"{s['steps']} steps/period{', fast Floquet' if s['fast'] else ''}), "
+                  f"{s['elements']} elements per blade, rotor speed {s['rotor_speed']:.4g} rad/s")
+        footer = []
         if self.unresolved:
-            lines.append(f"({self.unresolved} mesh modes above the temporal resolution "
-                         f"{s['resolution_per_rev']:.0f} per-rev not shown: raise --steps)")
-        lines.append(f"computed in {self.compute_time:.2f} s")
-        return "\n".join(lines)
+            footer.append(f"({self.unresolved} mesh modes above the temporal resolution "
+                          f"{s['resolution_per_rev']:.0f} per-rev not shown: raise --steps)")
+        footer.append(f"computed in {self.compute_time:.2f} s")
+        return format_table(header, self.modes, footer)
 
     def shape_samples(self, mode: Mode):
         """Periodic eigenvector of ``mode`` over one revolution: (times (M,), states (M, n)).
@@ -149,6 +139,25 @@ class ModalResult:
 
 def _ordinal(k: int) -> str:
     return {1: "1st", 2: "2nd", 3: "3rd"}.get(k, f"{k}th")
+
+
+def format_table(header: str, modes, footer=()) -> str:
+    """The modes as a table like the paper's Table 2. ``modes``: objects with the attributes
+    family, symmetry, index, frequency_per_rev, real_per_rev, frequency_hz, damping_ratio
+    (Mode, or the hawt_msgs/Mode message of the ROS service)."""
+    lines = [header, f"{'mode':<30}{'eigenvalue (per-rev)':>28}{'Hz':>11}{'damping':>11}"]
+    for m in modes:
+        name = (f"{m.family}" if m.family in ("yaw", "teeter")
+                else f"{_ordinal(m.index)} {(m.symmetry or '')} {m.family}".replace("  ", " "))
+        if abs(m.frequency_per_rev) < 5e-7 and abs(m.real_per_rev) < 5e-7:
+            ev = "0"
+        elif abs(m.frequency_per_rev) < 5e-7:
+            ev = f"{m.real_per_rev:+.6f}"
+        else:
+            ev = f"{m.real_per_rev:+.6f} ± {m.frequency_per_rev:.6f} i"
+        damping = f"{m.damping_ratio:>11.2e}" if np.isfinite(m.damping_ratio) else f"{'-':>11}"
+        lines.append(f"{name:<30}{ev:>28}{m.frequency_hz:>11.5f}{damping}")
+    return "\n".join(lines + list(footer))
 
 
 # ---------------------------------------------------------------------------- validation

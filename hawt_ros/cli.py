@@ -92,32 +92,15 @@ def modes_to_json(response) -> Dict[str, Any]:
     }
 
 
-def _ordinal(k: int) -> str:
-    return {1: "1st", 2: "2nd", 3: "3rd"}.get(k, f"{k}th")
-
-
 def format_modes_table(response) -> str:
     """The modes of a response as a table like ``hawt modes`` prints."""
-    s = response.settings
-    lines = [f"Dominant frequencies of the turbine '{s.turbine}' (Floquet, {s.method}, "
-             f"{s.steps} steps/period), {s.elements} elements per blade, rotor speed "
-             f"{s.rotor_speed:.4g} rad/s",
-             f"{'mode':<30}{'eigenvalue (per-rev)':>28}{'Hz':>11}{'damping':>11}"]
-    for m in response.modes:
-        if m.family in ("yaw", "teeter"):
-            name = m.family
-        else:
-            name = f"{_ordinal(m.index)} {m.symmetry} {m.family}".replace("  ", " ")
-        if m.frequency_per_rev == 0 and m.real_per_rev == 0:
-            ev = "0"
-        elif m.frequency_per_rev == 0:
-            ev = f"{m.real_per_rev:+.6f}"
-        else:
-            ev = f"{m.real_per_rev:+.6f} ± {m.frequency_per_rev:.6f} i"
-        damping = f"{m.damping_ratio:>11.2e}" if math.isfinite(m.damping_ratio) else f"{'-':>11}"
-        lines.append(f"{name:<30}{ev:>28}{m.frequency_hz:>11.5f}{damping}")
-    lines.append(f"{response.message}; computed in {response.compute_time:.2f} s")
-    return "\n".join(lines)
+    from hawt_core.modal import format_table
+    st = response.settings
+    header = (f"Dominant frequencies of the turbine '{st.turbine}' (Floquet, {st.method}, "
+              f"{st.steps} steps/period), {st.elements} elements per blade, rotor speed "
+              f"{st.rotor_speed:.4g} rad/s")
+    return format_table(header, response.modes,
+                        [f"{response.message}; computed in {response.compute_time:.2f} s"])
 
 
 class _Stop:
