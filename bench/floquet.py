@@ -181,6 +181,23 @@ def main(argv=None) -> int:
           "modes; order p: observed from 400/800/1600 where the differences exceed round-off, "
           "median (min))")
 
+    # equal accuracy: the paper's method needs K steps with err(K) ~ err(1000) (1000/K)^2 to
+    # reach the default's error; run it there (first N only) and compare the times
+    r = rows[0]
+    if np.isfinite(r["ep"]) and np.isfinite(r["er"]) and r["er"] > 0:
+        K_eq = int(2 * math.ceil(1000 * math.sqrt(r["ep"] / r["er"]) / 2))
+        N = r["N"]
+        base, _, _, _ = run(tb, N, "radau", 400)
+        _, m1600, _, _ = run(tb, N, "radau", 1600)
+        f1600, _ = match(base, m1600)
+        _, mq, tq, _ = run(tb, N, "paper", K_eq)
+        fq, _ = match(base, mq)
+        e_q, _, _ = max_rel(fq, f1600)
+        print()
+        print(f"Equal accuracy, N={N}: paper method with {K_eq} steps/period: {tq:.2f} s, "
+              f"error {e_q:.2e}; default (radau 400): {r['tr']:.2f} s, error {r['er']:.2e}; "
+              f"the default is {tq / r['tr']:.0f}x faster")
+
     if args.speeds > 0:
         speeds = np.linspace(3.0, 9.0, args.speeds)
         print()
