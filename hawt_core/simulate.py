@@ -174,22 +174,22 @@ def consistent_state(model, y, ydot, t, theta_rate=None):
     sd, kin, cols = _blade_rows(model)
     pos_cols = np.concatenate([cols["u"], cols["M"]])
 
-    def sub_jac(rows, cc, yd, yy):
-        Jy, _ = model.jacobians(yd, yy, t)
-        return sp.csr_matrix(Jy)[rows][:, cc]
+    def solve_subset(cc, rows, what):
+        """Solve the residual rows ``rows`` for the unknowns ``cc`` (the rest held)."""
+        def f(x):
+            yy = y.copy()
+            yy[cc] = x
+            return model.residual(ydot, yy, t)[rows]
+
+        def j(x):
+            yy = y.copy()
+            yy[cc] = x
+            return sp.csr_matrix(model.jacobians(ydot, yy, t)[0])[rows][:, cc]
+
+        return _lin_solve(model, f, y[cc], j, what)
 
     # 1. positions
-    def f_pos(x):
-        yy = y.copy()
-        yy[pos_cols] = x
-        return model.residual(ydot, yy, t)[sd]
-
-    def j_pos(x):
-        yy = y.copy()
-        yy[pos_cols] = x
-        return sub_jac(sd, pos_cols, ydot, yy)
-
-    y[pos_cols] = _lin_solve(model, f_pos, y[pos_cols], j_pos, "the position constraints")
+    y[pos_cols] = solve_subset(pos_cols, sd, "the position constraints")
 
     # 2. velocity level: d/dt of the constraint rows = Jy[sd] @ ydot = 0
     Jy, _ = model.jacobians(ydot, y, t)
@@ -209,17 +209,7 @@ def consistent_state(model, y, ydot, t, theta_rate=None):
     nr = model.nq + model.nu
     ydot[:model.nq] = model.rigid.qdot(y[:model.nq], y[model.nq:nr], t)
 
-    def f_kin(x):
-        yy = y.copy()
-        yy[vo] = x
-        return model.residual(ydot, yy, t)[kin]
-
-    def j_kin(x):
-        yy = y.copy()
-        yy[vo] = x
-        return sub_jac(kin, vo, ydot, yy)
-
-    y[vo] = _lin_solve(model, f_kin, y[vo], j_kin, "the kinematic equations")
+    y[vo] = solve_subset(vo, kin, "the kinematic equations")
     return y, ydot
 
 
