@@ -1032,7 +1032,15 @@ def main(argv: Optional[List[str]] = None) -> int:
         rclpy.try_shutdown()
         for s, h in old.items():
             signal.signal(s, h)
-    return code
+    # Everything is finalized (recording closed by node.shutdown, writers closed below).
+    # Leave without running the interpreter's teardown: middleware threads that are still
+    # joinable while C++ static destructors run make libstdc++ call std::terminate (an abort,
+    # status -6, seen under load); os._exit skips that race.
+    from .mcap_io import close_all_writers
+    close_all_writers()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code)
 
 
 if __name__ == "__main__":

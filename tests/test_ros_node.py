@@ -349,7 +349,7 @@ def test_publishes_joint_states_blades_markers_at_rate(spawn):
     first_message(node, js)
     n0 = len(js)
     t0 = time.monotonic()
-    wait_until(lambda: time.monotonic() - t0 >= 3.0 or not node.alive(), 5.0)
+    wait_until(lambda: time.monotonic() - t0 >= 3.0 or not node.alive(), 60.0)  # a 3 s window
     items = js.snapshot()[n0:]
     window = items[-1][0] - items[0][0]
     rate = (len(items) - 1) / window
@@ -755,7 +755,7 @@ def test_runtime_parameter_changes(spawn, tmp_path):
     wait_until(lambda: len(js) >= n0 + 2, 5.0)
     items = js.snapshot()[n0 + 1:]
     t0 = time.monotonic()
-    wait_until(lambda: time.monotonic() - t0 > 2.5, 4.0)
+    wait_until(lambda: time.monotonic() - t0 > 2.5, 60.0)  # a 2.5 s window
     items = js.snapshot()[n0 + 1:]
     rate = (len(items) - 1) / (items[-1][0] - items[0][0])
     print(f"\nafter publish_rate:=4.0: {rate:.2f} Hz")
