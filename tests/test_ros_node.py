@@ -342,7 +342,10 @@ def test_analysis_runner_cache_coalescing_cancel(monkeypatch):
 # ============================================================================ node tests
 @ros
 def test_publishes_joint_states_blades_markers_at_rate(spawn):
-    node, cli = spawn(REAL_TIME)
+    # the simulation stand-in (1 ms per step) keeps this about the node's publishing, not
+    # about how much CPU a crowded machine leaves the real simulator (which the end-to-end
+    # test of scripts/run.sh and the sim-time test below run)
+    node, cli = spawn(REAL_TIME, fake="simulate")
     js = cli.subscribe(JointState, "/joint_states")
     bd = cli.subscribe(BladeDeflection, "/blade_deflections")
     mk = cli.subscribe(MarkerArray, "/blade_markers")
@@ -409,9 +412,12 @@ def test_fast_mode_sim_time_stamps_and_clock(spawn):
     assert stamps[0] < 600.0    # simulation time (from 0; discovery may miss the first ones)
     assert np.all(d > 0)
     assert np.all(np.abs(d - 0.05) <= dt + 1e-6)  # publish_rate in simulation time
+    # /clock and joint_states are separate topics: the clock of the last instants may arrive
+    # after the joint-state snapshot; wait for it (bounded)
+    wait_until(lambda: max((stamp_ns(c.clock) for c in clk.msgs()), default=0) / 1e9
+               >= stamps[:-1].max() - 1e-9, 10.0, what="/clock to reach the published instants")
     clocks = np.array([stamp_ns(c.clock) for c in clk.msgs()]) / 1e9
     assert len(clocks) >= 5 and np.all(np.diff(clocks) >= 0)
-    assert clocks.max() >= stamps[:-1].max() - 1e-9
 
 
 @ros
