@@ -196,7 +196,7 @@ class TurbineModel:
                 if self.gravity else None
             self._tower_jac = ColouredJacobian(
                 block_tridiagonal_pattern(self.tower.pattern_blocks()))
-        self._jac = ColouredJacobian(self.sparsity())
+        self._reference_jac = None  # built on first use by jacobians_reference (tests only)
         self._beam_jac = ColouredJacobian(block_tridiagonal_pattern(self.beam.pattern_blocks()))
 
     def tower_top(self, ydot, y) -> Optional[np.ndarray]:
@@ -446,8 +446,10 @@ class TurbineModel:
     def jacobians_reference(self, ydot, y, t):
         """The same Jacobians by plain coloured complex steps on the whole residual (slow;
         the reference for tests of :meth:`jacobians`)."""
-        Jy = self._jac(lambda yy: self.residual(ydot, yy, t), y)
-        Jd = self._jac(lambda yd: self.residual(yd, y, t), ydot)
+        if self._reference_jac is None:  # colouring the whole pattern is not cheap: lazily
+            self._reference_jac = ColouredJacobian(self.sparsity())
+        Jy = self._reference_jac(lambda yy: self.residual(ydot, yy, t), y)
+        Jd = self._reference_jac(lambda yd: self.residual(yd, y, t), ydot)
         return Jy, Jd
 
     def linearize(self, y, ydot=None, t=0.0):
@@ -505,9 +507,7 @@ class TurbineModel:
         """Matrix S relabelling the blades after 1/Nb revolution: blade k's unknowns move to
         blade k+1's slot; rigid unknowns map as the rigid system says (the teeter angle of a
         two-bladed hub changes sign). Used by Peters' Fast Floquet."""
-        rigid_sign = self.rigid.relabelling_signs() if hasattr(self.rigid, "relabelling_signs") \
-            else np.array([-1.0 if "teeter" in nm else 1.0 for nm in self.layout.rigid_names])
-        rows, cols, vals = [], [], []
+        rigid_sign = self.rigid.relabelling_signs()
         nr = self.nq + self.nu
         rows, cols, vals = list(range(nr)), list(range(nr)), list(rigid_sign)
         if self.tower is not None:      # the tower (inertial frame) maps to itself

@@ -70,9 +70,8 @@ class Mode:
 
     @property
     def label(self) -> str:
-        sym = f"{self.symmetry} " if self.symmetry else ""
-        return f"{self.family} {self.index} {sym}".strip() if self.family in ("yaw", "teeter") \
-            else f"{self.family} {self.index} {sym}".strip()
+        """e.g. 'flap 1 antisymmetric', 'teeter 1'."""
+        return f"{self.family} {self.index} {self.symmetry or ''}".strip()
 
     def to_dict(self) -> dict:
         return {"family": self.family, "symmetry": self.symmetry, "index": self.index,
