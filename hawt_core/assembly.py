@@ -218,20 +218,36 @@ class TurbineModel:
 
     # ------------------------------------------------------------------ residual
     def residual(self, ydot, y, t):
-        """R(ydot, y, t) (n,): rigid kinematics, rigid dynamics, blades[, tower]. Complex-safe."""
+        """R(ydot, y, t): rigid kinematics, rigid dynamics, blades[, tower]. Complex-safe.
+
+        ``ydot``, ``y`` (n,) and a time ``t`` [s] give (n,); a batch ``ydot``, ``y`` (K, n)
+        with times ``t`` (K,) gives (K, n), the residual at K instants in one vectorized call
+        (the time-parallel simulation evaluates a window of steps this way)."""
+        y, ydot = np.asarray(y), np.asarray(ydot)
+        if y.ndim == 2:
+            return self._residual_batch(ydot, y, np.broadcast_to(t, y.shape[:1]))
         if self.tower is not None:
             return self._residual_tower(ydot, y, t)
+        return self._residual_batch(ydot[None], y[None], np.reshape(t, 1))[0]
+
+    def _residual_batch(self, ydot, y, t):
+        """(K, n) residual rows at K instants t (K,)."""
+        if self.tower is not None:      # the flexible-tower rigid system is not batched
+            return np.stack([self._residual_tower(a, b, c) for a, b, c in zip(ydot, y, t)])
+        K, nb, nbl = y.shape[0], self.n_blades, self.beam.n
         nq, nu, nr = self.nq, self.nu, self.nq + self.nu
-        q, u = y[:nq], y[nq:nr]
-        qd, ud = ydot[:nq], ydot[nq:nr]
-        yb = y[nr:].reshape(self.n_blades, self.beam.n)
-        ydb = ydot[nr:].reshape(self.n_blades, self.beam.n)
-        v, w = self.rigid.root_motion(q, u, t)
-        g = self.rigid.gravity_in_root(q, t) if self.gravity else None
-        rb = self.beam.residual(ydb, yb, v, w, g)
-        rk = self.rigid.kinematics(q, qd, u, t)
-        rd = self.rigid.dynamics(q, u, ud, t, yb[:, 0:3], yb[:, 3:6])
-        return np.concatenate([np.atleast_1d(rk), np.atleast_1d(rd), rb.ravel()])
+        q, u = y[:, :nq], y[:, nq:nr]
+        qd, ud = ydot[:, :nq], ydot[:, nq:nr]
+        yb = y[:, nr:].reshape(K, nb, nbl)
+        v, w = self.rigid.root_motion(q, u, t)                            # (K, nb, 3)
+        g = self.rigid.gravity_in_root(q, t).reshape(K * nb, 3) if self.gravity else None
+        rb = self.beam.residual(ydot[:, nr:].reshape(K * nb, nbl), yb.reshape(K * nb, nbl),
+                                v.reshape(K * nb, 3), w.reshape(K * nb, 3), g)
+        out = np.empty((K, self.n), dtype=rb.dtype)
+        out[:, :nq] = self.rigid.kinematics(q, qd, u, t)
+        out[:, nq:nr] = self.rigid.dynamics(q, u, ud, t, yb[:, :, 0:3], yb[:, :, 3:6])
+        out[:, nr:] = rb.reshape(K, nb * nbl)
+        return out
 
     def _residual_tower(self, ydot, y, t):
         nq, nu, nr = self.nq, self.nu, self.nq + self.nu
@@ -308,42 +324,15 @@ class TurbineModel:
             vals_y.append(comp_y.reshape(C, nb, nbl)[bcol, k, br])
             rows_d.append(br + off), cols_d.append(bc + off)
             vals_d.append(comp_d.reshape(C, nb, nbl)[bcol, k, br])
-        # blade rows w.r.t. rigid coordinates and speeds (root motion and gravity)
-        if nr:
-            vs, ws, gs = [], [], []
-            for j in range(nr):
-                x = np.concatenate([q, u]).astype(complex)
-                x[j] += 1j * h
-                vj, wj = self.rigid.root_motion(x[:nq], x[nq:], t)
-                vs.append(vj), ws.append(wj)
-                gs.append(self.rigid.gravity_in_root(x[:nq], t) if self.gravity else None)
-            V, W = np.concatenate(vs), np.concatenate(ws)
-            G = np.concatenate(gs) if self.gravity else None
-            r = self.beam.residual(np.tile(ydb, (nr, 1)), np.tile(yb, (nr, 1)).astype(complex),
-                                   V, W, G).imag / h                    # (nr*nb, nbl)
-            r = r.reshape(nr, nb * nbl)
-            rr, cc = np.nonzero(r.T)
-            rows_y.append(nr + rr), cols_y.append(cc), vals_y.append(r.T[rr, cc])
-            # rigid rows w.r.t. rigid unknowns, their rates, and the root loads
-            root_cols = np.concatenate([self.layout.blade_offset(k) + np.arange(6)
-                                        for k in range(nb)])
-            def rigid_rows(yy, yyd):
-                F = yy[nr:].reshape(nb, nbl)
-                return np.concatenate([np.atleast_1d(self.rigid.kinematics(yy[:nq], yyd[:nq], yy[nq:nr], t)),
-                                       np.atleast_1d(self.rigid.dynamics(yy[:nq], yy[nq:nr], yyd[nq:nr], t,
-                                                                         F[:, 0:3], F[:, 3:6]))])
-            for col in np.concatenate([np.arange(nr), root_cols]):
-                yy = y.astype(complex)
-                yy[col] += 1j * h
-                d = rigid_rows(yy, ydot).imag / h
-                nzr = np.flatnonzero(d)
-                rows_y.append(nzr), cols_y.append(np.full(len(nzr), col)), vals_y.append(d[nzr])
-            for col in range(nr):
-                yyd = ydot.astype(complex)
-                yyd[col] += 1j * h
-                d = rigid_rows(y.astype(complex), yyd).imag / h
-                nzr = np.flatnonzero(d)
-                rows_d.append(nzr), cols_d.append(np.full(len(nzr), col)), vals_d.append(d[nzr])
+        if nr:          # the rigid columns and the rigid rows (they vary with the azimuth)
+            c = self.coupling_jacobians(ydot, y, t)
+            rc, kc = c["rigid"], c["root_loads"]
+            for J, rows, cols, vals in ((c["y_cols"], rows_y, cols_y, vals_y),
+                                        (c["ydot_cols"], rows_d, cols_d, vals_d)):
+                rr, cc = np.nonzero(J)
+                rows.append(rr), cols.append(rc[cc]), vals.append(J[rr, cc])
+            rr, cc = np.nonzero(c["y_rows"])
+            rows_y.append(rc[rr]), cols_y.append(kc[cc]), vals_y.append(c["y_rows"][rr, cc])
         shape = (self.n, self.n)
         Jy = sp.csc_matrix((np.concatenate(vals_y), (np.concatenate(rows_y), np.concatenate(cols_y))), shape=shape)
         Jd = sp.csc_matrix((np.concatenate(vals_d), (np.concatenate(rows_d), np.concatenate(cols_d))), shape=shape)
@@ -442,6 +431,61 @@ class TurbineModel:
         Jy.sum_duplicates()
         Jd.sum_duplicates()
         return Jy, Jd
+
+    def coupling_jacobians(self, ydot, y, t):
+        """Exact (complex-step) partial derivatives of the rigid-body coupling, the entries of
+        dR/dy and dR/dydot that vary with the azimuth when the yaw is free (rigid tower):
+
+        * ``y_cols``, ``ydot_cols`` (n, nq + nu): every row w.r.t. the rigid unknowns
+          ``rigid`` (the rigid rows, and the blade rows through the root motion and gravity;
+          the blade rows do not depend on the rigid rates);
+        * ``y_rows`` (nq + nu, len(root_loads)): the rigid rows w.r.t. the blades' root
+          loads ``root_loads`` (the only other unknowns they depend on; no rate enters).
+
+        Three batched calls: blade rows for all rigid perturbations, rigid rows for all
+        perturbations of y, and of ydot."""
+        if self.tower is not None:
+            raise ValueError("coupling_jacobians: not available with a flexible tower")
+        y = np.asarray(y, float)
+        ydot = np.asarray(ydot, float)
+        h = STEP
+        nq, nu, nr, nb, nbl = self.nq, self.nu, self.nq + self.nu, self.n_blades, self.beam.n
+        rc = np.arange(nr)
+        kc = np.concatenate([self.layout.blade_offset(k) + np.arange(6) for k in range(nb)])
+        yb, ydb = y[nr:].reshape(nb, nbl), ydot[nr:].reshape(nb, nbl)
+        # blade rows: perturb the rigid unknowns through the root motion and gravity
+        x = np.tile(y[:nr].astype(complex), (nr, 1)) + 1j * h * np.eye(nr)
+        tt = np.full(nr, t)
+        v, w = self.rigid.root_motion(x[:, :nq], x[:, nq:], tt)
+        g = self.rigid.gravity_in_root(x[:, :nq], tt).reshape(nr * nb, 3) \
+            if self.gravity else None
+        rb = self.beam.residual(np.tile(ydb, (nr, 1)), np.tile(yb, (nr, 1)).astype(complex),
+                                v.reshape(nr * nb, 3), w.reshape(nr * nb, 3), g).imag / h
+        y_cols = np.zeros((self.n, nr))
+        y_cols[nr:] = rb.reshape(nr, nb * nbl).T
+        ydot_cols = np.zeros((self.n, nr))
+
+        def rigid_rows(Y, Yd):             # (P, n) -> (P, nr), P perturbations at once
+            P = Y.shape[0]
+            F = Y[:, nr:].reshape(P, nb, nbl)
+            T = np.full(P, t)
+            return np.concatenate([self.rigid.kinematics(Y[:, :nq], Yd[:, :nq], Y[:, nq:nr], T),
+                                   self.rigid.dynamics(Y[:, :nq], Y[:, nq:nr], Yd[:, nq:nr], T,
+                                                       F[:, :, 0:3], F[:, :, 3:6])], axis=1)
+        # one call: perturbations of y at the rigid and root-load columns, then of ydot at
+        # the rigid columns
+        cols = np.concatenate([rc, kc])
+        P = len(cols) + nr
+        Y = np.tile(y.astype(complex), (P, 1))
+        Yd = np.tile(ydot.astype(complex), (P, 1))
+        Y[np.arange(len(cols)), cols] += 1j * h
+        Yd[len(cols) + rc, rc] += 1j * h
+        d = rigid_rows(Y, Yd).imag / h                                      # (P, nr)
+        y_cols[:nr] = d[:nr].T
+        y_rows = d[nr:len(cols)].T
+        ydot_cols[:nr] = d[len(cols):].T
+        return {"rigid": rc, "root_loads": kc, "y_cols": y_cols, "ydot_cols": ydot_cols,
+                "y_rows": y_rows}
 
     def jacobians_reference(self, ydot, y, t):
         """The same Jacobians by plain coloured complex steps on the whole residual (slow;

@@ -43,6 +43,7 @@ import scipy.sparse.linalg as spl
 
 from .fem.beam import BLOCK_SIZE, ROOT_SIZE
 from .jacobian import ColouredJacobian
+from .window import WindowFailure, WindowSolver
 
 __all__ = ["Simulator", "SimulationError", "NAMED", "consistent_state", "add_cli",
            "cmd_simulate", "parse_perturb"]
@@ -271,7 +272,18 @@ class Simulator:
     ``mode_amplitude`` [m], ``mode_blade_signs``: a mode-shape perturbation (see
     :func:`_mode_delta`). ``y0``: an explicit starting state (made consistent unless
     ``consistent=False``). ``record``: keep time histories for ``history()``/``save()``.
+
+    ``method``: how each step's equations are solved (the time discretization is the same):
+    ``"window"`` solves ``window_steps`` steps together (hawt_core.window: one batched
+    residual evaluation per iteration for the whole window; several times faster for small
+    and medium meshes), ``"step"`` one step at a time with a sparse LU (the fallback when a
+    window does not converge, and used for adaptive steps), ``"auto"`` (default) picks
+    ``"window"`` for fixed steps and up to WINDOW_MAX_UNKNOWNS unknowns (its matrices are
+    dense).
     """
+
+    #: largest number of unknowns for which method="auto" uses the window solver
+    WINDOW_MAX_UNKNOWNS = 1500
 
     #: coefficients and least-squares window (steps) of the autoregressive predictor
     AR_ORDER, AR_WINDOW = 8, 8
@@ -281,7 +293,7 @@ class Simulator:
                  step_seconds: Optional[float] = None, t0: float = 0.0,
                  adaptive: bool = False, rtol: float = 1e-4, newton_tol: float = 1e-8,
                  max_iter: int = 8, record: bool = True, consistent: bool = True,
-                 harmonics: int = 6):
+                 harmonics: int = 6, method: str = "auto", window_steps: int = 24):
         self.model = model
         self.n = model.n
         self.diff = np.asarray(model.differential, bool)
@@ -378,6 +390,7 @@ class Simulator:
         self._update_cost = 0.0
         self._its_after_update = self._its_after_refresh = None
         self._setup_low_rank()
+        self._setup_window(method, window_steps)
         self._init_outputs()
         if self.record:
             self._hist = []
@@ -571,7 +584,13 @@ class Simulator:
                 "residual_evaluations": self.residual_evaluations,
                 "jacobian_evaluations": self.jacobian_evaluations,
                 "factorizations": self.factorizations, "rejected_steps": self.rejected_steps,
-                "low_rank_updates": self.low_rank_updates,
+                "low_rank_updates": self.low_rank_updates, "method": self.method,
+                **({"windows": self._win.windows, "window_steps": self.window_steps,
+                    "window_iterations": self._win.iterations,
+                    "window_rigid_updates": self._win.updates,
+                    "window_failures": self._win.failures,
+                    "residual_instants": self._win.residual_instants}
+                   if self._win is not None else {}),
                 "step_seconds": self.h, "step_deg": math.degrees(self.h * self.omega),
                 "unknowns": self.n}
 
@@ -903,7 +922,10 @@ class Simulator:
         """Advance one step. Raises SimulationError on failure (the state is unchanged)."""
         w0 = time.perf_counter()
         try:
-            self._step()
+            if self.method == "window":
+                self._window_step()
+            else:
+                self._step()
         finally:
             self.wall_seconds += time.perf_counter() - w0
 
@@ -957,29 +979,138 @@ class Simulator:
                 f"{why}; scaled residual norm at the predictor {rn:.3e}, Newton increment "
                 f"{dn:.3e} (tolerance {self.newton_tol:.1e})")
         self._score_predictors(x)
-        self._xhist.append((h, x / self._scale))
-        if len(self._xhist) > self.AR_ORDER + self.AR_WINDOW:
-            del self._xhist[0]
         self._jac_fresh = self._upd_fresh = False
-        d = self.diff
+        self._accept(x, tn, h)
+
+    def _accept(self, x, tn, h):
+        """Take the converged step unknowns x of the step from tn to tn + h."""
+        self._check_finite(x, tn + h)
+        self._commit(tn, h, x[self.diff].copy(), x[self.alg].copy(), x / self._scale)
+
+    def _check_finite(self, x, t1):
         if not np.all(np.isfinite(x)):
             raise SimulationError(f"simulation: non-finite state at step {self.steps + 1}, "
                                   f"t = {t1:.6g} s")
-        self._grid.append((t1, x[d].copy()))
-        self._mid.append((tn + h / 2, x[self.alg].copy()))
+
+    def _commit(self, tn, h, xd, za, xs, y=None):
+        """Histories (for the predictors and the algebraic values at grid times), time,
+        state, record, for the step from tn to tn + h with grid values xd (differential),
+        midpoint values za (algebraic), scaled unknowns xs; ``y``: the full state at
+        tn + h when already known."""
+        t1 = tn + h
+        self._xhist.append((h, xs))
+        if len(self._xhist) > self.AR_ORDER + self.AR_WINDOW:
+            del self._xhist[0]
+        self._grid.append((t1, xd))
+        self._mid.append((tn + h / 2, za))
         if len(self._grid) > 4:
             del self._grid[0]
             del self._mid[0]
         self.t = t1
         self.steps += 1
-        y = np.empty(self.n)
-        y[d] = x[d]
-        y[self.alg] = self._alg_at(t1)
+        if y is None:
+            y = np.empty(self.n)
+            y[self.diff] = xd
+            y[self.alg] = self._alg_at(t1)
         self.y = y
         if self.adaptive:
             self.h = self._h_next
         if self.record:
             self._record()
+
+    # ------------------------------------------------------------------ window solver
+    def _setup_window(self, method, window_steps):
+        if method not in ("auto", "window", "step"):
+            raise ValueError(f"method: {method!r} is not allowed; need 'auto', 'window' or "
+                             f"'step'")
+        if isinstance(window_steps, bool) or not isinstance(window_steps, (int, np.integer)) \
+                or window_steps < 1:
+            raise ValueError(f"window_steps: {window_steps!r} is not allowed; need an integer "
+                             f">= 1")
+        usable = hasattr(self.model, "jacobians") and not self.adaptive
+        if method == "window" and not usable:
+            raise ValueError("method: 'window' is not allowed with adaptive steps or a model "
+                             "without structured Jacobians; use 'step'")
+        if method == "auto":
+            method = "window" if usable and self.n <= self.WINDOW_MAX_UNKNOWNS else "step"
+        self.method = method
+        self.window_steps = int(window_steps)
+        self._buffer = []                # solved steps not yet taken: (h, x)
+        self._steps_wanted = None        # full steps left in run() (windows never overshoot)
+        self._sequential_left = 0        # single steps to take after a failed window
+        self._win = None
+        if method == "window":
+            self._win = WindowSolver(self.model, self._scale, self.diff, self.newton_tol,
+                                     max_steps=self.window_steps,
+                                     azimuth_updates=self._coupling_varies())
+
+    def _coupling_varies(self) -> bool:
+        """True when the rigid rows and columns of the Jacobian change with the azimuth at
+        the starting state (a free yaw: the yaw axis is fixed, the blades turn; gravity;
+        tilt), compared at two azimuths 0.3 revolution apart."""
+        m = self.model
+        if m.nq + m.nu == 0 or getattr(m, "tower", None) is not None \
+                or not hasattr(m, "coupling_jacobians"):
+            return False
+        z = np.zeros(self.n)
+        dt = 0.3 * (m.period if np.isfinite(m.period) else 1.0)
+        a, b = (m.coupling_jacobians(z, self.y_base, self.t0 + s) for s in (0.0, dt))
+        for key in ("y_cols", "ydot_cols", "y_rows"):
+            big = max(np.abs(a[key]).max(initial=0.0), 1e-300)
+            if np.abs(a[key] - b[key]).max(initial=0.0) > 1e-9 * big:
+                return True
+        return False
+
+    def _window_step(self):
+        """Take the next step from the window buffer, solving a new window when it is empty
+        (or was solved with another step size); single steps after a window failed."""
+        h = self.h
+        if self._buffer and self._buffer[0][0] != h:     # another step size: solve anew
+            self._buffer = []
+        if not self._buffer and self._sequential_left == 0:
+            K = self._win.steps if self._steps_wanted is None else \
+                max(1, min(self._win.steps, self._steps_wanted))
+            self._solve_window(K, h)
+        if not self._buffer:
+            self._sequential_left = max(0, self._sequential_left - 1)
+            self._step()
+            return
+        self._commit(self.t, *self._buffer.pop(0))
+
+    def _solve_window(self, K, h):
+        win = self._win
+        yn = self._grid[-1][1]
+        z0 = self._mid[-1][1] if self._mid else self._z_init
+        before = win.refreshes
+        X = None
+        for attempt in range(2):
+            try:
+                X = win.solve(yn, z0, self.t, h, K)
+                break
+            except WindowFailure as exc:
+                self._window_error = str(exc)
+                if win.refreshes > before and attempt == 0:
+                    break               # failed with a fresh base: single steps instead
+        self.jacobian_evaluations += win.refreshes - before
+        self.factorizations += win.refreshes - before
+        if X is None:
+            self.rejected_steps += 1
+            self._sequential_left = K
+            return
+        self._check_finite(X, self.t + K * h)
+        # everything the K steps will need, vectorized: grid and midpoint values, scaled
+        # unknowns, and the full states (algebraic values at the grid times extrapolated
+        # linearly from the last two midpoint values, as _alg_at does)
+        Xd, Xa = X[:, self._di], X[:, self._ai]
+        Za = np.concatenate([z0[None], Xa]) if self._mid else np.concatenate([Xa[:1], Xa])
+        tm_prev = self._mid[-1][0] if self._mid else self.t - h / 2
+        span = np.full(K, h)
+        span[0] = self.t + h / 2 - tm_prev
+        Y = np.empty((K, self.n))
+        Y[:, self._di] = Xd
+        Y[:, self._ai] = Xa + (Xa - Za[:-1]) * (0.5 * h / span)[:, None]
+        Xs = X / self._scale
+        self._buffer = [(h, Xd[k], Xa[k], Xs[k], Y[k]) for k in range(K)]
 
     def _h_nominal(self):
         return self.h
@@ -1012,6 +1143,8 @@ class Simulator:
         h_nom = self.h
         w_start = self.wall_seconds
         while self.t < t_end - 1e-9 * max(1.0, abs(t_end)):
+            self._steps_wanted = int(math.floor((t_end - self.t) / self.h
+                                                + 1e-9 * max(1.0, abs(t_end))))
             if self.t + self.h > t_end:
                 keep = self.h
                 self.h = t_end - self.t
@@ -1027,6 +1160,7 @@ class Simulator:
                 progress(min(1.0, done / duration) if duration > 0 else 1.0,
                          f"t = {self.t:.3f} s / {t_end:.3f} s, RTF {rtf:.2f}, "
                          f"steps {self.steps}")
+        self._steps_wanted = None
         if progress is not None:
             progress(1.0, f"t = {self.t:.3f} s done")
         del h_nom

@@ -143,3 +143,48 @@ def test_periodic_steady_state_free_yaw_gravity():
     for t in np.linspace(0, m.period, 7)[:-1] + 0.013:
         assert np.abs(m.residual(ps.rate_at(t), ps.at(t), t)).max() <= 1e-8 * scale
     assert ps.states[0, m.layout["yaw"]] == pytest.approx(0.0, abs=1e-15)
+
+
+@pytest.mark.parametrize("turbine", list(_variants()),
+                         ids=["paper", "everything-on", "3-blade-rigid-hub", "flexible-tower",
+                              "flexible-tower-everything-on", "flexible-tower-3-blade-no-rigid-dofs"])
+def test_batched_residual_equals_one_instant_at_a_time(turbine):
+    """Reference: the residual evaluated at one instant at a time (the path the Jacobian,
+    steady-state and Floquet tests check against the paper's equations). A batch of K = 5
+    random states, rates and times in ONE call (the time-parallel simulation's evaluation,
+    vectorized through Kane's equations and the beams for a rigid tower) gives the same rows
+    to 1e-13 relative, for real and complex (complex-step) arguments."""
+    m = TurbineModel(turbine, elements=3)
+    rng = np.random.default_rng(7)
+    K = 5
+    Y = m.initial_guess() + 1e-2 * rng.standard_normal((K, m.n))
+    Yd = rng.standard_normal((K, m.n))
+    T = rng.uniform(0, 2, K)
+    for Y_ in (Y, Y + 1e-20j * rng.standard_normal((K, m.n))):
+        R = m.residual(Yd, Y_, T)
+        ref = np.array([m.residual(Yd[k], Y_[k], T[k]) for k in range(K)])
+        assert R.shape == (K, m.n)
+        scale = np.abs(ref).max()
+        assert np.abs(R.real - ref.real).max() <= 1e-13 * scale
+        assert np.abs(R.imag - ref.imag).max() <= 1e-13 * np.abs(ref.imag).max() + 1e-300
+
+
+@pytest.mark.parametrize("turbine", list(_variants())[:3],
+                         ids=["paper", "everything-on", "3-blade-rigid-hub"])
+def test_coupling_jacobians_equal_plain_complex_step(turbine):
+    """Reference: the plain coloured complex-step Jacobians of the whole residual. The
+    coupling blocks (every row w.r.t. the rigid unknowns and their rates, the rigid rows
+    w.r.t. the root loads), which the window solver refreshes every window when the yaw is
+    free, equal them to 1e-12 relative, and the rigid rows have no other entries."""
+    m = TurbineModel(turbine, elements=3)
+    yd, y = _random_state(m)
+    c = m.coupling_jacobians(yd, y, 0.3)
+    Ry, Rd = (J.toarray() for J in m.jacobians_reference(yd, y, 0.3))
+    rc, kc = c["rigid"], c["root_loads"]
+    scale = max(np.abs(Ry).max(), np.abs(Rd).max())
+    assert np.abs(c["y_cols"] - Ry[:, rc]).max() <= 1e-12 * scale
+    assert np.abs(c["ydot_cols"] - Rd[:, rc]).max() <= 1e-12 * scale
+    assert np.abs(c["y_rows"] - Ry[np.ix_(rc, kc)]).max() <= 1e-12 * scale
+    others = np.setdiff1d(np.arange(m.n), np.concatenate([rc, kc]))
+    assert np.abs(Ry[np.ix_(rc, others)]).max(initial=0.0) == 0.0
+    assert np.abs(Rd[np.ix_(rc, np.setdiff1d(np.arange(m.n), rc))]).max(initial=0.0) == 0.0

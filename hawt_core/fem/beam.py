@@ -76,6 +76,7 @@ def rotation_matrix(theta):
 
 
 class BeamElements:
+    BIG = 64
     """The discretized beam operator for ``B`` identical beams sharing one mesh.
 
     ``props``: ElementProperties (mesh, 6x6 compliance and mass per element).
@@ -218,7 +219,7 @@ class BeamElements:
         udg, thdg = a[..., 12:15], a[..., 15:18]
         E9 = self._E9
 
-        big = B * N > 64
+        big = B * N > self.BIG
 
         def cross(x, z, shape):                                 # x (.., 3, 1), z (.., 1, 3)
             if big:   # large batches (Jacobians): fewer flops; small: fewer NumPy calls

@@ -96,21 +96,36 @@ def _cross(a, b):
     b = np.asarray(b)
     a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
     b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack(np.broadcast_arrays(a1 * b2 - a2 * b1, a2 * b0 - a0 * b2,
-                                        a0 * b1 - a1 * b0), -1)
+    c0 = a1 * b2 - a2 * b1
+    out = np.empty(c0.shape + (3,), dtype=c0.dtype)
+    out[..., 0] = c0
+    out[..., 1] = a2 * b0 - a0 * b2
+    out[..., 2] = a0 * b1 - a1 * b0
+    return out
+
+
+def _dot(a, b):
+    """Dot product on the last axis with broadcasting."""
+    return (a * b).sum(-1)
+
+
+def _mv(M, v):
+    """Matrix (..., 3, 3) times vector (..., 3) with broadcasting."""
+    return (M @ v[..., None])[..., 0]
+
 
 def _rotation(axis: int, a) -> np.ndarray:
+    """Rotation matrices (a.shape + (3, 3)) for an angle or an array of angles."""
     c = np.cos(a)
     s = np.sin(a)
-    z = 0.0 * c
-    o = z + 1.0
-    if axis == 0:
-        rows = [[o, z, z], [z, c, -s], [z, s, c]]
-    elif axis == 1:
-        rows = [[c, z, s], [z, o, z], [-s, z, c]]
-    else:
-        rows = [[c, -s, z], [s, c, z], [z, z, o]]
-    return np.array(rows)
+    R = np.zeros(np.shape(c) + (3, 3), dtype=np.result_type(c, float))
+    i, j = ((1, 2), (2, 0), (0, 1))[axis]      # the plane turned, right-handed about axis
+    R[..., axis, axis] = 1.0
+    R[..., i, i] = c
+    R[..., j, j] = c
+    R[..., i, j] = -s
+    R[..., j, i] = s
+    return R
 
 
 def rot1(a) -> np.ndarray:
@@ -133,6 +148,10 @@ class RigidSystem:
 
     Parameters are read from a :class:`hawt_core.model.Turbine`.  All array arguments may be
     real or complex; see the module docstring for frames, signs and the meaning of the loads.
+    With a rigid tower every method also accepts a batch: leading dimensions on ``q``, ``u``,
+    their rates, ``t`` and the root loads (e.g. ``q`` (K, n_q), ``t`` (K,), root loads
+    (K, Nb, 3)) give results with the same leading dimensions, one per batch entry (the
+    time-parallel simulation evaluates a window of steps in one call this way).
     """
 
     def __init__(self, turbine):
@@ -201,26 +220,29 @@ class RigidSystem:
 
     # ------------------------------------------------------------------ helpers
     def _split(self, x, n):
-        """Active entries -> (yaw part, teeter part), zeros for removed DOFs."""
+        """Active entries (..., n) -> (yaw part, teeter part) (...), zeros for removed DOFs."""
         x = np.asarray(x)
-        if x.shape != (n,):
-            raise ValueError(f"expected shape ({n},), got {x.shape}")
+        if x.ndim == 0 or x.shape[-1] != n:
+            raise ValueError(f"expected shape (..., {n}), got {x.shape}")
         i = 0
-        a = b = 0.0
+        a = b = np.zeros(x.shape[:-1])
         if self.yaw_free:
-            a = x[i]
+            a = x[..., i]
             i += 1
         if self.teeter:
-            b = x[i]
+            b = x[..., i]
         return a, b
 
     def _join(self, a, b):
+        """(yaw part, teeter part) -> active entries on a last axis."""
         out = []
         if self.yaw_free:
             out.append(a)
         if self.teeter:
             out.append(b)
-        return np.array(out) if out else np.zeros(0)
+        if not out:
+            return np.zeros(np.shape(a) + (0,))
+        return np.stack(np.broadcast_arrays(*out), -1)
 
     def azimuth(self, t):
         """Shaft azimuth psi = Omega0 t (blade 0 up at t = 0)."""
@@ -236,9 +258,9 @@ class RigidSystem:
         else:
             Tt = None
             Y = rot1(qy)
-        S = Y @ rot2(self.tilt) @ rot3(self.azimuth(t))
+        S = Y @ rot2(self.tilt) @ rot3(self.azimuth(np.asarray(t)))
         H = S @ rot2(-qh)
-        B = np.einsum("ij,kjl->kil", H, self.root_in_hub)
+        B = np.einsum("...ij,kjl->...kil", H, self.root_in_hub)
         out = {"Y": Y, "S": S, "H": H, "B": B}
         if Tt is not None:
             out["T"] = Tt
@@ -248,8 +270,9 @@ class RigidSystem:
         """Velocities, partial velocities and their ingredients, all in N (the last result is
         cached: one residual evaluation asks for it twice, root motion and dynamics; callers
         treat the returned dict as read-only)."""
-        q, u = np.asarray(q), np.asarray(u)
-        key = (q.dtype.str, q.tobytes(), u.dtype.str, u.tobytes(), complex(t))
+        q, u, t = np.asarray(q), np.asarray(u), np.asarray(t)
+        key = (q.dtype.str, q.shape, q.tobytes(), u.dtype.str, u.shape, u.tobytes(),
+               t.dtype.str, t.shape, t.tobytes())
         cached = getattr(self, "_kin_cache", None)
         if cached is not None and cached[0] == key:
             return cached[1]
@@ -262,23 +285,26 @@ class RigidSystem:
         U1, U2 = self._split(u, self.n_u)
         fr = self.frames(q, t)
         Y, S, H = fr["Y"], fr["S"], fr["H"]
-        y1, s3, h2 = Y[:, 0], S[:, 2], H[:, 1]
-        w_Y = U1 * y1
+        y1, s3, h2 = Y[..., :, 0], S[..., :, 2], H[..., :, 1]
+        # batch shapes: scalars (...), vectors (..., 3); U1c, U2c broadcast against vectors
+        U1c, U2c = np.asarray(U1)[..., None], np.asarray(U2)[..., None]
+        w_Y = U1c * y1
         w_S = w_Y + self.omega0 * s3
-        y1h2 = y1 @ h2                    # = y1 . s2
-        # partial angular velocities of H (rows: U1, U2) and the remainder
+        y1h2 = _dot(y1, h2)               # = y1 . s2
+        # partial angular velocities of H (rows: U1, U2) and the remainder, (..., 2, 3)
         if self.teeter:
-            wr_H = np.array([y1 - y1h2 * h2, h2])
+            wr_H = np.stack([y1 - y1h2[..., None] * h2, h2], -2)
         else:
-            wr_H = np.array([y1, 0.0 * h2])
-        wr_S = np.array([y1, 0.0 * h2])
-        w_H = wr_H[0] * U1 + wr_H[1] * U2 + self.omega0 * s3
+            wr_H = np.stack([y1, 0.0 * h2], -2)
+        wr_S = np.stack([y1, 0.0 * h2], -2)
+        w_H = wr_H[..., 0, :] * U1c + wr_H[..., 1, :] * U2c + self.omega0 * s3
         # partial velocities of SH (teeter-axis point) and of the root points
-        vr_SH = np.array([self.d * _cross(y1, s3), 0.0 * s3])
-        v_SH = vr_SH[0] * U1
-        rho = self.root_offset_hub @ H.T                       # (Nb, 3) in N
-        vr_P = vr_SH[:, None, :] + _cross(wr_H[:, None, :], rho[None, :, :])   # (2, Nb, 3)
-        v_P = v_SH[None, :] + _cross(w_H[None, :], rho)
+        vr_SH = np.stack([self.d * _cross(y1, s3), 0.0 * s3], -2)
+        v_SH = vr_SH[..., 0, :] * U1c
+        rho = np.einsum("kj,...ij->...ki", self.root_offset_hub, H)    # (..., Nb, 3) in N
+        vr_P = vr_SH[..., :, None, :] + _cross(wr_H[..., :, None, :],
+                                               rho[..., None, :, :])     # (..., 2, Nb, 3)
+        v_P = v_SH[..., None, :] + _cross(w_H[..., None, :], rho)
         return dict(qy=qy, qh=qh, U1=U1, U2=U2, fr=fr, y1=y1, s3=s3, h2=h2, y1h2=y1h2,
                     w_Y=w_Y, w_S=w_S, w_H=w_H, wr_H=wr_H, wr_S=wr_S,
                     vr_SH=vr_SH, v_SH=v_SH, vr_P=vr_P, v_P=v_P, rho=rho)
@@ -425,16 +451,15 @@ class RigidSystem:
         self._check_tower(tower)
         k = self._kin(q, u, t)
         B = k["fr"]["B"]
-        v = np.einsum("kji,kj->ki", B, k["v_P"])
-        w = np.einsum("kji,j->ki", B, k["w_H"])
+        v = np.einsum("...kji,...kj->...ki", B, k["v_P"])
+        w = np.einsum("...kji,...j->...ki", B, k["w_H"])
         return v, w
 
     def gravity_in_root(self, q, t, tower=None):
         """(Nb, 3): the gravity vector ``-g n1`` [m/s^2] in each blade's root basis b."""
         self._check_tower(tower)
         B = self.frames(q, t, tower)["B"]
-        gN = np.array([-self.g, 0.0, 0.0])
-        return np.einsum("kji,j->ki", B, gN)
+        return -self.g * B[..., 0, :]           # rows of B^T n1
 
     def qdot(self, q, u, t):
         """Coordinate rates from the speeds: qy' = U1, qh' = U1 (y1 . s2) - U2."""
@@ -449,8 +474,8 @@ class RigidSystem:
         """Residual of the kinematic ODEs, (n_q,): ``qy' - U1`` and
         ``qh' + U2 - (y1 . s2) U1`` (= ``qh' + U2 + sin(psi) U1`` without tilt)."""
         qd = np.asarray(qdot)
-        if qd.shape != (self.n_q,):
-            raise ValueError(f"expected qdot shape ({self.n_q},), got {qd.shape}")
+        if qd.ndim == 0 or qd.shape[-1] != self.n_q:
+            raise ValueError(f"expected qdot shape (..., {self.n_q}), got {qd.shape}")
         return qd - self.qdot(q, u, t)
 
     def dynamics(self, q, u, udot, t, root_force, root_moment, tower=None):
@@ -473,41 +498,49 @@ class RigidSystem:
         Fb = np.asarray(root_force)
         Mb = np.asarray(root_moment)
         nb = self.n_blades
-        if Fb.shape != (nb, 3) or Mb.shape != (nb, 3):
-            raise ValueError(f"root loads must have shape ({nb}, 3)")
+        if Fb.shape[-2:] != (nb, 3) or Mb.shape[-2:] != (nb, 3):
+            raise ValueError(f"root loads must have shape (..., {nb}, 3)")
+        # scalars broadcast against vectors (batch entries on leading axes)
+        U1c, U2c = np.asarray(U1)[..., None], np.asarray(U2)[..., None]
+        Ud1c, Ud2c = np.asarray(Ud1)[..., None], np.asarray(Ud2)[..., None]
 
         # --- accelerations
         h2dot = _cross(w_H, h2)
         s3dot = _cross(w_Y, s3)
         if self.teeter:
-            wr1dot = -((y1 @ h2dot) * h2 + k["y1h2"] * h2dot)
+            wr1dot = -(_dot(y1, h2dot)[..., None] * h2 + k["y1h2"][..., None] * h2dot)
             wr2dot = h2dot
         else:
             wr1dot = 0.0 * h2
             wr2dot = 0.0 * h2
-        alpha_H = (wr_H[0] * Ud1 + wr_H[1] * Ud2 + wr1dot * U1 + wr2dot * U2
-                   + self.omega0 * s3dot)
-        a_SH = self.d * (_cross(y1, s3) * Ud1 + _cross(y1, s3dot) * U1)
+        alpha_H = (wr_H[..., 0, :] * Ud1c + wr_H[..., 1, :] * Ud2c + wr1dot * U1c
+                   + wr2dot * U2c + self.omega0 * s3dot)
+        a_SH = self.d * (_cross(y1, s3) * Ud1c + _cross(y1, s3dot) * U1c)
 
         # --- generalized inertia forces
-        I_H = H @ self.hub_inertia @ H.T
-        T_star = -(I_H @ alpha_H + _cross(w_H, I_H @ w_H))
+        I_H = H @ self.hub_inertia @ np.swapaxes(H, -1, -2)
+        T_star = -(_mv(I_H, alpha_H) + _cross(w_H, _mv(I_H, w_H)))
         R_star = -self.hub_mass * a_SH
-        Fstar = wr_H @ T_star + k["vr_SH"] @ R_star
-        Fstar = Fstar + np.array([-self.nacelle_yaw_inertia * Ud1, 0.0 * Ud1])
+        Fstar = _mv(wr_H, T_star) + _mv(k["vr_SH"], R_star)
+        Fstar = Fstar + self._pair(-self.nacelle_yaw_inertia * Ud1, 0.0 * Ud1)
 
         # --- generalized active forces
-        F_N = np.einsum("kij,kj->ki", B, Fb)
-        M_N = np.einsum("kij,kj->ki", B, Mb)
-        F = np.einsum("rki,ki->r", k["vr_P"], F_N) + wr_H @ M_N.sum(axis=0)
-        F = F + k["vr_SH"] @ (self.hub_mass * np.array([-self.g, 0.0, 0.0]))
-        F = F + np.array([-self.k_yaw * qy - self.c_yaw * U1, 0.0 * U1])
+        F_N = np.einsum("...kij,...kj->...ki", B, Fb)
+        M_N = np.einsum("...kij,...kj->...ki", B, Mb)
+        F = np.einsum("...rki,...ki->...r", k["vr_P"], F_N) + _mv(wr_H, M_N.sum(axis=-2))
+        F = F + k["vr_SH"][..., 0] * (-self.hub_mass * self.g)
+        F = F + self._pair(-self.k_yaw * qy - self.c_yaw * U1, 0.0 * U1)
         if self.teeter:
             qhdot = U1 * k["y1h2"] - U2
-            tau = (self.k_teeter * qh + self.c_teeter * qhdot) * h2   # on H, reaction on S
-            F = F + (wr_H - k["wr_S"]) @ tau
+            tau = (self.k_teeter * qh + self.c_teeter * qhdot)[..., None] * h2  # on H
+            F = F + _mv(wr_H - k["wr_S"], tau)                                # reaction on S
         res = F + Fstar
-        return self._join(res[0], res[1])
+        return self._join(res[..., 0], res[..., 1])
+
+    @staticmethod
+    def _pair(a, b):
+        """(yaw row, teeter row) values -> array (..., 2)."""
+        return np.stack(np.broadcast_arrays(a, b), -1)
 
     def relabelling_signs(self):
         """Signs (n_q + n_u,) mapping the rigid unknowns under the blade relabelling symmetry
