@@ -506,3 +506,45 @@ def test_window_solver_bad_input():
     with pytest.raises(ValueError, match="method: 'window' is not allowed with adaptive"):
         Simulator(model, method="window", adaptive=True)
     assert Simulator(model, adaptive=True).method == "step"
+
+
+# ---------------------------------------------------------------- command line
+def test_cli_simulate_json_and_csv(tmp_path, capsys):
+    """`hawt simulate` (the issue's interface): --json summary keys, CSV header with the named
+    columns first and per-blade, per-node deflections; the two solvers (--method) give the
+    same final teeter angle to 1e-6 rad (reference: each other, default tolerance)."""
+    import csv
+    import json
+    from hawt_core import cli
+    final = {}
+    for method in ("window", "step"):
+        out = tmp_path / f"run_{method}.csv"
+        argv = ["simulate", "--duration", "0.3", "--elements", "2", "--step-deg", "2",
+                "--perturb", "teeter=0.02", "--lock-yaw", "--json", "--output", str(out),
+                "--method", method]
+        assert cli.main(argv) == 0
+        s = json.loads(capsys.readouterr().out)
+        for key in ("simulated_seconds", "wall_seconds", "real_time_factor", "steps"):
+            assert key in s
+        assert s["method"] == method and s["steps"] == 52
+        assert s["simulated_seconds"] == pytest.approx(0.3)
+        with open(out) as f:
+            rows = list(csv.reader(f))
+        assert rows[0][:6] == ["time", "azimuth", "yaw", "yaw_rate", "teeter", "teeter_rate"]
+        assert len(rows) == 1 + 53 and "blade1_node2_u3" in rows[0]
+        final[method] = s["final"]["teeter"]
+    assert abs(final["window"] - final["step"]) < 1e-6
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["simulate", "--duration", "nan"], ["duration", "nan"]),
+    (["simulate", "--duration", "1", "--step-deg", "-1"], ["step-deg", "-1"]),
+    (["simulate", "--duration", "1", "--perturb", "tetter=1"], ["tetter", "allowed"]),
+    (["simulate", "--duration", "1", "--method", "fast"], ["method", "fast"]),
+])
+def test_cli_simulate_bad_input(argv, words, capsys):
+    from hawt_core import cli
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err
+    for w in words:
+        assert w in err

@@ -17,7 +17,8 @@ def test_simulated_yaw_teeter_divergence_grows_at_the_floquet_rate():
     revolutions; over revolutions 32..45 (amplitudes < 0.01 rad: linear regime) the
     log-linear slope equals Re(eta) of the Floquet teeter mode, 0.045268 per-rev x Omega0 =
     0.2725 1/s, within 0.5 % (reference: modal_analysis of the same model; the paper
-    prints 0.045299 per-rev). Measured: 0.27275 vs 0.27251 (0.09 %)."""
+    prints 0.045299 per-rev). Measured: 0.27286 vs 0.27253 (0.12 %; 0.27278 with the step
+    solver)."""
     T = load_turbine()
     floquet = max(m.real_per_rev for m in modal_analysis(T, elements=2).modes if m.family == "teeter")
     m = TurbineModel(T, elements=2)
