@@ -442,48 +442,51 @@ class TurbineModel:
         * ``y_rows`` (nq + nu, len(root_loads)): the rigid rows w.r.t. the blades' root
           loads ``root_loads`` (the only other unknowns they depend on; no rate enters).
 
-        Three batched calls: blade rows for all rigid perturbations, rigid rows for all
-        perturbations of y, and of ydot."""
+        ``t`` may be an array of M times: the arrays then have a leading dimension M (same
+        state, several azimuths, in the same two batched calls: blade rows for all rigid
+        perturbations, rigid rows for all perturbations of y and ydot)."""
         if self.tower is not None:
             raise ValueError("coupling_jacobians: not available with a flexible tower")
         y = np.asarray(y, float)
         ydot = np.asarray(ydot, float)
+        ts = np.atleast_1d(np.asarray(t, float))
+        M = len(ts)
         h = STEP
         nq, nu, nr, nb, nbl = self.nq, self.nu, self.nq + self.nu, self.n_blades, self.beam.n
         rc = np.arange(nr)
         kc = np.concatenate([self.layout.blade_offset(k) + np.arange(6) for k in range(nb)])
         yb, ydb = y[nr:].reshape(nb, nbl), ydot[nr:].reshape(nb, nbl)
         # blade rows: perturb the rigid unknowns through the root motion and gravity
-        x = np.tile(y[:nr].astype(complex), (nr, 1)) + 1j * h * np.eye(nr)
-        tt = np.full(nr, t)
+        x = np.tile(y[:nr].astype(complex), (M * nr, 1)) + 1j * h * np.tile(np.eye(nr), (M, 1))
+        tt = np.repeat(ts, nr)
         v, w = self.rigid.root_motion(x[:, :nq], x[:, nq:], tt)
-        g = self.rigid.gravity_in_root(x[:, :nq], tt).reshape(nr * nb, 3) \
+        g = self.rigid.gravity_in_root(x[:, :nq], tt).reshape(M * nr * nb, 3) \
             if self.gravity else None
-        rb = self.beam.residual(np.tile(ydb, (nr, 1)), np.tile(yb, (nr, 1)).astype(complex),
-                                v.reshape(nr * nb, 3), w.reshape(nr * nb, 3), g).imag / h
-        y_cols = np.zeros((self.n, nr))
-        y_cols[nr:] = rb.reshape(nr, nb * nbl).T
-        ydot_cols = np.zeros((self.n, nr))
-
-        def rigid_rows(Y, Yd):             # (P, n) -> (P, nr), P perturbations at once
-            P = Y.shape[0]
-            F = Y[:, nr:].reshape(P, nb, nbl)
-            T = np.full(P, t)
-            return np.concatenate([self.rigid.kinematics(Y[:, :nq], Yd[:, :nq], Y[:, nq:nr], T),
-                                   self.rigid.dynamics(Y[:, :nq], Y[:, nq:nr], Yd[:, nq:nr], T,
-                                                       F[:, :, 0:3], F[:, :, 3:6])], axis=1)
-        # one call: perturbations of y at the rigid and root-load columns, then of ydot at
-        # the rigid columns
+        rb = self.beam.residual(np.tile(ydb, (M * nr, 1)),
+                                np.tile(yb, (M * nr, 1)).astype(complex),
+                                v.reshape(M * nr * nb, 3), w.reshape(M * nr * nb, 3), g).imag / h
+        y_cols = np.zeros((M, self.n, nr))
+        y_cols[:, nr:] = rb.reshape(M, nr, nb * nbl).transpose(0, 2, 1)
+        ydot_cols = np.zeros((M, self.n, nr))
+        # rigid rows, one call: perturbations of y at the rigid and root-load columns, then
+        # of ydot at the rigid columns, at every time
         cols = np.concatenate([rc, kc])
         P = len(cols) + nr
         Y = np.tile(y.astype(complex), (P, 1))
         Yd = np.tile(ydot.astype(complex), (P, 1))
         Y[np.arange(len(cols)), cols] += 1j * h
         Yd[len(cols) + rc, rc] += 1j * h
-        d = rigid_rows(Y, Yd).imag / h                                      # (P, nr)
-        y_cols[:nr] = d[:nr].T
-        y_rows = d[nr:len(cols)].T
-        ydot_cols[:nr] = d[len(cols):].T
+        Y, Yd, T = np.tile(Y, (M, 1)), np.tile(Yd, (M, 1)), np.repeat(ts, P)
+        F = Y[:, nr:].reshape(M * P, nb, nbl)
+        d = np.concatenate([self.rigid.kinematics(Y[:, :nq], Yd[:, :nq], Y[:, nq:nr], T),
+                            self.rigid.dynamics(Y[:, :nq], Y[:, nq:nr], Yd[:, nq:nr], T,
+                                                F[:, :, 0:3], F[:, :, 3:6])], axis=1)
+        d = (d.imag / h).reshape(M, P, nr).transpose(0, 2, 1)               # (M, nr, P)
+        y_cols[:, :nr] = d[:, :, :nr]
+        y_rows = d[:, :, nr:len(cols)]
+        ydot_cols[:, :nr] = d[:, :, len(cols):]
+        if np.ndim(t) == 0:
+            y_cols, ydot_cols, y_rows = y_cols[0], ydot_cols[0], y_rows[0]
         return {"rigid": rc, "root_loads": kc, "y_cols": y_cols, "ydot_cols": ydot_cols,
                 "y_rows": y_rows}
 

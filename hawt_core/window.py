@@ -98,6 +98,8 @@ class WindowSolver:
         self.max_steps = max(1, int(max_steps))
         self.steps = self.max_steps
         self._calm = 0
+        #: ((time, h), coupling) evaluated one window ahead, at the then current state
+        self._next_coupling = None
         self._theta_hist = []           # contraction rates of third and later iterations
         self._theta_age = 0             # windows accepted after two iterations since
         # statistics
@@ -145,13 +147,25 @@ class WindowSolver:
         self.pending_refresh = False
         self.refreshes += 1
 
-    def update_rigid(self, x, yn, tm, h):
+    def update_rigid(self, x, yn, tm, h, t_next=None):
         """Replace the rigid rows and columns of the base by their exact values at the step
         unknowns x and midpoint time tm: Woodbury update of the base inverse and of P
-        (rank 2 (nq + nu))."""
+        (rank 2 (nq + nu)). ``t_next``: also evaluate them at that time (the next window's
+        centre, same state: the same two batched calls) for the next update."""
         nr = self.nr
-        ydot, ym = self._rates_and_midpoint(x[None], yn, h)
-        c = self.model.coupling_jacobians(ydot[0], ym[0], tm)
+        nxt = self._next_coupling
+        self._next_coupling = None
+        if nxt is not None and nxt[0][1] == h and abs(nxt[0][0] - tm) <= 1e-6 * h:
+            c = nxt[1]
+        else:
+            ydot, ym = self._rates_and_midpoint(x[None], yn, h)
+            if t_next is None:
+                c = self.model.coupling_jacobians(ydot[0], ym[0], tm)
+            else:
+                cc = self.model.coupling_jacobians(ydot[0], ym[0], np.array([tm, t_next]))
+                c = {k: (v[0] if k not in ("rigid", "root_loads") else v) for k, v in cc.items()}
+                self._next_coupling = ((t_next, h), {k: (v[1] if k not in ("rigid", "root_loads")
+                                                         else v) for k, v in cc.items()})
         rc, kc = c["rigid"], c["root_loads"]
         rs = self.row[:, None] * self.sc[rc][None, :]
         # the rigid unknowns are differential: A gets dR/dydot / h + dR/dy / 2, B the rest;
@@ -229,7 +243,8 @@ class WindowSolver:
         if self.pending_refresh or self.h != h:
             self.refresh(xc, yn, tc, h)
         elif self.azimuth_updates:
-            self.update_rigid(xc, yn, tc, h)
+            # the next window (same length) reuses values computed now at its centre
+            self.update_rigid(xc, yn, tc, h, t_next=tc + K * h)
         self.base_age += 1
         dn_old = None
         theta = 0.0

@@ -188,3 +188,9 @@ def test_coupling_jacobians_equal_plain_complex_step(turbine):
     others = np.setdiff1d(np.arange(m.n), np.concatenate([rc, kc]))
     assert np.abs(Ry[np.ix_(rc, others)]).max(initial=0.0) == 0.0
     assert np.abs(Rd[np.ix_(rc, np.setdiff1d(np.arange(m.n), rc))]).max(initial=0.0) == 0.0
+    # several times at once (one call) = one time at a time
+    cm = m.coupling_jacobians(yd, y, np.array([0.3, 0.7]))
+    c7 = m.coupling_jacobians(yd, y, 0.7)
+    for key in ("y_cols", "ydot_cols", "y_rows"):
+        assert np.abs(cm[key][0] - c[key]).max() <= 1e-14 * scale
+        assert np.abs(cm[key][1] - c7[key]).max() <= 1e-14 * scale
