@@ -1074,6 +1074,9 @@ class Simulator:
         h = self.h
         if self._buffer and self._buffer[0][0] != h:     # another step size: solve anew
             self._buffer = []
+        if self._steps_wanted == 0:      # run()'s shortened last step: keep the window's base
+            self._step()
+            return
         if not self._buffer and self._sequential_left == 0:
             K = self._win.steps if self._steps_wanted is None else \
                 max(1, min(self._win.steps, self._steps_wanted))

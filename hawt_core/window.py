@@ -101,7 +101,7 @@ class WindowSolver:
         #: ((time, h), coupling) evaluated one window ahead, at the then current state
         self._next_coupling = None
         self._theta_hist = []           # contraction rates of third and later iterations
-        self._theta_age = 0             # windows accepted after two iterations since
+        self._theta_age = 0             # two-iteration windows since the last such rate
         # statistics
         self.windows = 0
         self.iterations = 0
