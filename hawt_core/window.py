@@ -39,8 +39,6 @@ it.  The window is a solver choice, not a different time discretization.
 """
 from __future__ import annotations
 
-import time
-
 import numpy as np
 import scipy.linalg as sla
 
@@ -80,11 +78,9 @@ class WindowSolver:
         self.tol = float(tol)
         self.max_iter = int(max_iter)
         self.nr = int(getattr(model, "nq", 0)) + int(getattr(model, "nu", 0))
-        self.period = float(getattr(model, "period", np.inf))
         self.azimuth_updates = bool(azimuth_updates and self.nr > 0
                                     and hasattr(model, "coupling_jacobians")
-                                    and getattr(model, "tower", None) is None
-                                    and np.isfinite(self.period))
+                                    and getattr(model, "tower", None) is None)
         if self.nr and not np.all(self.di[:self.nr] == np.arange(self.nr)):
             raise ValueError("window solver: the rigid unknowns must be the first, "
                              "differential ones")
@@ -234,7 +230,6 @@ class WindowSolver:
         t0); ``z0``: starting guess of the algebraic (midpoint) unknowns. Returns X (K, n):
         row k = [y at t0 + (k+1) h | z at t0 + (k + 1/2) h] (in the model's order).
         Raises WindowFailure when the iteration does not converge (nothing is changed)."""
-        w0 = time.perf_counter()
         X = np.empty((K, self.n))
         X[:, self.di] = yn
         X[:, self.ai] = z0
@@ -282,7 +277,6 @@ class WindowSolver:
         self._adapt(it + 1, theta)
         self.windows += 1
         self.last_iterations = it + 1
-        self.last_seconds = time.perf_counter() - w0
         return X
 
     def _first_theta(self, th):
