@@ -47,7 +47,9 @@ def cross(a, b):
 
 
 def dot(a, b):
-    return (a * b).sum(-1)
+    """Dot product on the last axis with broadcasting (einsum: ~3x faster than
+    ``(a * b).sum(-1)``, whose reduction over a length-3 axis is slow)."""
+    return np.einsum("...i,...i->...", a, b)
 
 
 def rot_T_apply(theta, a):
@@ -219,6 +221,9 @@ class BeamElements:
         ag = (self._Lg @ ends).reshape(N, G + 1, B, 24)          # (N, G+1, B, 24)
         a = ag[:, :G]
         ug, thg, Vg, Omg = a[..., 0:3], a[..., 3:6], a[..., 6:9], a[..., 9:12]
+        # a contiguous copy of the rotation parameters, used in many products and dot
+        # products below (on the strided view they are 2x slower)
+        thg = np.ascontiguousarray(thg)
         udg, thdg = a[..., 12:15], a[..., 15:18]
         E9 = self._E9
 
@@ -259,8 +264,8 @@ class BeamElements:
             T[..., 3, :] = g
         th1 = thg[..., None, :]                                 # (N, G, B, 1, 3)
         thT = cross(th1[..., :, None], T[..., None, :], T.shape)
-        dots = (T * th1).sum(-1)[..., None]                     # (N, G, B, nT, 1)
-        ss = (0.25 * (thg * thg).sum(-1))[..., None, None]      # (N, G, B, 1, 1)
+        dots = dot(T, th1)[..., None]                           # (N, G, B, nT, 1)
+        ss = (0.25 * dot(thg, thg))[..., None, None]            # (N, G, B, 1, 1)
         rT = (((1 - ss) * T + (self._sgn4 if grav else self._sgn3) * thT + 0.5 * th1 * dots)
               / (1 + ss))
         # Q [Om - C w, kap]
@@ -268,7 +273,7 @@ class BeamElements:
         np.subtract(Omg, rT[..., 2, :], out=T2[..., 0, :])
         T2[..., 1, :] = kap[:, None]
         thT2 = cross(th1[..., :, None], T2[..., None, :], T2.shape)
-        q = T2 + 0.5 * thT2 + 0.25 * th1 * (T2 * th1).sum(-1)[..., None]
+        q = T2 + 0.5 * thT2 + 0.25 * th1 * dot(T2, th1)[..., None]
 
         # integrands at the Gauss points: [equilibrium f, m | kinematics u, theta | strain
         # displacement u, theta]

@@ -106,7 +106,7 @@ def _cross(a, b):
 
 def _dot(a, b):
     """Dot product on the last axis with broadcasting."""
-    return (a * b).sum(-1)
+    return np.einsum("...i,...i->...", a, b)
 
 
 def _mv(M, v):
