@@ -985,6 +985,9 @@ def main(argv: Optional[List[str]] = None) -> int:
         received.append(signum)
         stop.set()
 
+    # `kill -USR1 <pid>` prints every thread's Python stack to stderr (diagnosing a hang)
+    import faulthandler
+    faulthandler.register(signal.SIGUSR1, all_threads=True)
     # Start the analysis forkserver before any DDS thread exists.
     AnalysisRunner.prepare_forkserver()
     from rclpy.signals import SignalHandlerOptions

@@ -126,7 +126,20 @@ def test_run_script_node_modes_ctrl_c(tmp_path):
 
         # ------------------------------------------------ Ctrl-C: finalized recording
         os.killpg(proc.pid, signal.SIGINT)
-        rc = proc.wait(timeout=max(5.0, min(20.0, left())))
+        try:
+            rc = proc.wait(timeout=max(5.0, min(20.0, left())))
+        except subprocess.TimeoutExpired:
+            # diagnose: the node's threads' stacks (hawt-node's faulthandler on SIGUSR1)
+            ps = subprocess.run(["ps", "-o", "pid,ppid,stat,etime,args", "-g", str(proc.pid)],
+                                capture_output=True, text=True).stdout
+            for line in ps.splitlines()[1:]:
+                if "hawt-node" in line:
+                    try:
+                        os.kill(int(line.split()[0]), signal.SIGUSR1)
+                    except (ProcessLookupError, ValueError):
+                        pass
+            time.sleep(1.0)
+            pytest.fail(f"run.sh did not exit within the wait after SIGINT\n{ps}\n{output()}")
         out = output()
         assert rc == 0, out
         assert "Bag state:" in out and "finalized" in out, out      # the script's `hawt info`
