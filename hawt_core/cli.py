@@ -54,15 +54,25 @@ def _positive_int(text: str) -> int:
     return v
 
 
-def _rotor_speed(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        v = float("nan")
-    if not math.isfinite(v) or v < 0:
-        raise argparse.ArgumentTypeError(
-            f"{text!r} is not allowed; need a finite number >= 0 [rad/s]")
-    return v
+def finite_float(field: str = "", minimum=None, unit: str = ""):
+    """argparse type: a finite float (>= minimum when given); the error names ``field``, the
+    text given and what is allowed."""
+    need = "a finite number" + (f" >= {minimum:g}" if minimum is not None else "") + \
+        (f" [{unit}]" if unit else "")
+
+    def conv(text: str) -> float:
+        try:
+            v = float(text)
+        except ValueError:
+            v = float("nan")
+        if not math.isfinite(v) or (minimum is not None and v < minimum):
+            raise argparse.ArgumentTypeError(
+                f"{field + ' ' if field else ''}{text!r} is not allowed; need {need}")
+        return v
+    return conv
+
+
+_rotor_speed = finite_float(minimum=0.0, unit="rad/s")
 
 
 def _model_args(p):
@@ -239,17 +249,8 @@ def _speeds(text: str):
     if len(parts) != 3:
         raise argparse.ArgumentTypeError(
             f"{text!r} is not allowed; need START:STOP:COUNT [rad/s], e.g. 3:9:30")
-    vals = []
-    for name, part in zip(("START", "STOP"), parts[:2]):
-        try:
-            v = float(part)
-        except ValueError:
-            v = float("nan")
-        if not math.isfinite(v):
-            raise argparse.ArgumentTypeError(f"{name} {part!r} is not allowed; need a finite "
-                                             "number [rad/s]")
-        vals.append(v)
-    start, stop = vals
+    start, stop = (finite_float(name, unit="rad/s")(part)
+                   for name, part in zip(("START", "STOP"), parts[:2]))
     try:
         count = int(parts[2])
     except ValueError:

@@ -1235,27 +1235,13 @@ def cmd_simulate(args) -> int:
     return 0
 
 
-def _cli_float(field):
-    def conv(text):
-        try:
-            v = float(text)
-        except ValueError:
-            v = float("nan")
-        if not math.isfinite(v):
-            import argparse
-            raise argparse.ArgumentTypeError(f"{field}: {text!r} is not allowed; need a finite "
-                                             "number")
-        return v
-    return conv
-
-
 def add_arguments(p):
-    from .cli import _positive_int
+    from .cli import _positive_int, finite_float
     p.add_argument("turbine", nargs="?", default=None, metavar="TURBINE",
                    help="turbine YAML file (default: the paper's Table 1 turbine)")
-    p.add_argument("--duration", type=_cli_float("duration"), required=True, metavar="S",
+    p.add_argument("--duration", type=finite_float(), required=True, metavar="S",
                    help="simulated time [s]")
-    p.add_argument("--step-deg", type=_cli_float("step-deg"), default=1.0, metavar="DEG",
+    p.add_argument("--step-deg", type=finite_float(), default=1.0, metavar="DEG",
                    help="time step in rotor azimuth [deg] (default 1)")
     p.add_argument("--elements", "-n", type=_positive_int, default=None, metavar="N",
                    help="finite elements per blade (default: the turbine file's)")

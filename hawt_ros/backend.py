@@ -44,26 +44,24 @@ def _fake_parts() -> set:
             if p.strip()}
 
 
+#: part -> (module, (entry point, exception class))
+_PARTS = {"simulate": ("hawt_core.simulate", ("Simulator", "SimulationError")),
+          "modal": ("hawt_core.modal", ("modal_analysis", "Cancelled"))}
+
+
 def load_backend(part: str) -> SimpleNamespace:
     """``part`` 'simulate' -> namespace(Simulator, SimulationError, source);
     'modal' -> namespace(modal_analysis, Cancelled, source). Raises ImportError with a clear
     text when the part is not available."""
+    if part not in _PARTS:
+        raise ValueError(f"part: {part!r} is not allowed; choose simulate or modal")
+    module, names = _PARTS[part]
     fake = _fake_module()
-    use_fake = fake is not None and part in _fake_parts()
-    if part == "simulate":
-        if use_fake:
-            return SimpleNamespace(Simulator=fake.Simulator, SimulationError=fake.SimulationError,
-                                   source=f"fake ({os.environ['HAWT_ROS_FAKE']})")
-        mod = importlib.import_module("hawt_core.simulate")
-        return SimpleNamespace(Simulator=mod.Simulator,
-                               SimulationError=getattr(mod, "SimulationError", RuntimeError),
-                               source="hawt_core.simulate")
-    if part == "modal":
-        if use_fake:
-            return SimpleNamespace(modal_analysis=fake.modal_analysis, Cancelled=fake.Cancelled,
-                                   source=f"fake ({os.environ['HAWT_ROS_FAKE']})")
-        mod = importlib.import_module("hawt_core.modal")
-        return SimpleNamespace(modal_analysis=mod.modal_analysis,
-                               Cancelled=getattr(mod, "Cancelled", RuntimeError),
-                               source="hawt_core.modal")
-    raise ValueError(f"part: {part!r} is not allowed; choose simulate or modal")
+    if fake is not None and part in _fake_parts():
+        return SimpleNamespace(**{n: getattr(fake, n) for n in names},
+                               source=f"fake ({os.environ['HAWT_ROS_FAKE']})")
+    mod = importlib.import_module(module)
+    # the entry point itself must exist; the exception class falls back to RuntimeError
+    return SimpleNamespace(**{names[0]: getattr(mod, names[0])},
+                           **{n: getattr(mod, n, RuntimeError) for n in names[1:]},
+                           source=module)

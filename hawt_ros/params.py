@@ -132,6 +132,15 @@ def parse_perturb(text: Any) -> Dict[str, float]:
     return out
 
 
+#: numeric parameters: (lower bound, lower bound allowed, upper bound, what is allowed)
+_RANGES = {
+    "step_deg": (0.0, False, 30.0, "need a finite number > 0 and <= 30 [deg of rotor azimuth]"),
+    "publish_rate": (0.0, False, 1000.0, "need a finite number > 0 and <= 1000 [Hz]"),
+    "real_time_factor": (0.0, True, 1000.0, "need a finite number >= 0 and <= 1000 "
+                         "(1 = wall clock, 0 = as fast as possible)"),
+}
+
+
 def validate_parameter(name: str, value: Any) -> Any:
     """The checked, normalized value of one node parameter; ParameterError if not allowed."""
     if name == "turbine":
@@ -145,22 +154,10 @@ def validate_parameter(name: str, value: Any) -> Any:
         if not _is_int(value) or not 0 <= value <= MAX_ELEMENTS:
             raise ParameterError(name, value, allowed)
         return int(value)
-    if name == "step_deg":
-        allowed = "need a finite number > 0 and <= 30 [deg of rotor azimuth]"
+    if name in _RANGES:
+        low, closed, high, allowed = _RANGES[name]
         x = _number(name, value, allowed)
-        if not 0 < x <= 30:
-            raise ParameterError(name, value, allowed)
-        return x
-    if name == "publish_rate":
-        allowed = "need a finite number > 0 and <= 1000 [Hz]"
-        x = _number(name, value, allowed)
-        if not 0 < x <= 1000:
-            raise ParameterError(name, value, allowed)
-        return x
-    if name == "real_time_factor":
-        allowed = "need a finite number >= 0 and <= 1000 (1 = wall clock, 0 = as fast as possible)"
-        x = _number(name, value, allowed)
-        if not 0 <= x <= 1000:
+        if not ((low <= x) if closed else (low < x)) or not x <= high:
             raise ParameterError(name, value, allowed)
         return x
     if name == "record":

@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from ros_support import require_ros
 
 HERE = Path(__file__).resolve().parent
 FAKES = HERE / "ros_fakes.py"
@@ -50,13 +51,7 @@ except Exception as exc:  # noqa: BLE001
 
 
 def _require_ros():
-    if _ROS_ERROR is not None:
-        msg = f"rclpy/hawt_msgs cannot be imported ({_ROS_ERROR})"
-        if os.environ.get("HAWT_REQUIRE_ROS") == "1":
-            pytest.fail(msg + " but HAWT_REQUIRE_ROS=1")
-        pytest.skip(msg)
-    if not NODE_EXE.exists():
-        pytest.fail(f"{NODE_EXE} missing: install hawt into this venv (pip install -e .)")
+    require_ros(_ROS_ERROR, NODE_EXE)
 
 
 ros = pytest.mark.ros

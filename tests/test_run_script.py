@@ -19,6 +19,7 @@ import time
 from pathlib import Path
 
 import pytest
+from ros_support import require_ros
 
 ROOT = Path(__file__).resolve().parents[1]
 RUN_SH = ROOT / "scripts" / "run.sh"
@@ -43,13 +44,7 @@ BUDGET = 88.0           # s, the whole test
 
 
 def _require_ros():
-    if _ROS_ERROR is not None:
-        msg = f"rclpy/hawt_msgs cannot be imported ({_ROS_ERROR})"
-        if os.environ.get("HAWT_REQUIRE_ROS") == "1":
-            pytest.fail(msg + " but HAWT_REQUIRE_ROS=1")
-        pytest.skip(msg)
-    if not HAWT_EXE.exists():
-        pytest.fail(f"{HAWT_EXE} missing: install hawt into this venv (pip install -e .)")
+    require_ros(_ROS_ERROR, HAWT_EXE)
 
 
 def _domain() -> int:
