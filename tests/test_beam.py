@@ -8,11 +8,10 @@ Richardson extrapolation with the observed O(h^2) convergence of the discretizat
 from __future__ import annotations
 
 import numpy as np
-import pytest
 import scipy.linalg as sl
 from scipy.optimize import brentq
 
-from hawt_core.blade_modes import SpinningBlade, blade_modes
+from hawt_core.blade_modes import blade_modes
 from hawt_core.fem.beam import BeamElements
 from hawt_core.fem.sections import mesh_beam
 from hawt_core.jacobian import (ColouredJacobian, block_tridiagonal_pattern,
@@ -77,7 +76,6 @@ def test_coloured_jacobian_equals_dense_complex_step_and_central_differences():
     N = 3
     beam = BeamElements(mesh_beam(Beam(8.0, sec, N)))
     y = rng.normal(size=beam.n) * 0.3
-    y[beam.differential] *= 1.0
     yd = rng.normal(size=beam.n)
     v, w = rng.normal(size=3), rng.normal(size=3)
     g = np.array([-9.81, 1.0, 2.0])
@@ -204,14 +202,12 @@ def chebyshev_cantilever(m, ei, length, n=48, count=3):
     A = np.block([[D2, -np.diag(1 / ei(x))], [Z, D2]])
     B = np.block([[Z, Z], [np.diag(m(x)), Z]])
     root, tip = 0, n
-    rows = {root: ("w", I[root]), tip: ("wp", D1[root])}
     # eq-1 boundary rows -> w(0) = 0 and w'(0) = 0; eq-2 boundary rows -> M(L) = M'(L) = 0
     A[root], A[tip] = np.r_[I[root], np.zeros(n + 1)], np.r_[D1[root], np.zeros(n + 1)]
     A[n + 1 + root] = np.r_[np.zeros(n + 1), I[tip]]
     A[n + 1 + tip] = np.r_[np.zeros(n + 1), D1[tip]]
     for r in (root, tip, n + 1 + root, n + 1 + tip):
         B[r] = 0
-    del rows
     lam = sl.eigvals(A, B)
     lam = lam[np.isfinite(lam)]
     lam = np.sort(lam[(np.abs(lam.imag) < 1e-6 * np.abs(lam)) & (lam.real > 0)].real)

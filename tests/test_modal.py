@@ -8,7 +8,6 @@ import dataclasses as dc
 
 import numpy as np
 import pytest
-import scipy.linalg as sl
 
 from hawt_core.assembly import TurbineModel
 from hawt_core.blade_modes import finite_modes

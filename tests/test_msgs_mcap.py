@@ -403,7 +403,7 @@ def test_bag_folder_layout(tmp_path):
 
 def test_truncated_file_recovers_complete_chunks(written_bag, tmp_path):
     """Cutting a file anywhere loses at most the chunk being cut (and what follows)."""
-    path, messages = written_bag
+    path, _ = written_bag
     data = path.read_bytes()
     full = [(m.topic, m.log_time) for m in BagReader(path, decode="raw")]
     previous = 0
@@ -496,7 +496,7 @@ def test_close_from_signal_handler_finalizes(tmp_path):
 def test_atexit_finalizes(tmp_path):
     path = tmp_path / "atexit.mcap"
     proc = run_child(WRITER_CHILD, path, "exit")
-    out, err = proc.communicate(timeout=60)
+    _, err = proc.communicate(timeout=60)
     assert proc.returncode == 0, err
     info = bag_info(path)
     assert info["finalized"] and info["message_count"] == 300

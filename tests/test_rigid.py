@@ -49,7 +49,6 @@ class Ref:
     """Frames, points and energies written from the documented conventions, independently."""
 
     def __init__(self, tb):
-        self.tb = tb
         self.Om = tb.rotor.speed
         self.nb = tb.rotor.blades
         self.beta = tb.rotor.precone

@@ -102,7 +102,6 @@ class NodeProcess:
         args = [str(NODE_EXE), "--ros-args"]
         for k, v in params.items():
             args += ["-p", f"{k}:={v}"]
-        self.args = args
         self._log = open(self.log_path, "w")
         self.proc = subprocess.Popen(args, env=e, stdout=self._log, stderr=subprocess.STDOUT,
                                      cwd=str(tmp_path))
@@ -754,7 +753,6 @@ def test_runtime_parameter_changes(spawn, tmp_path):
     assert r.successful, r.reason
     n0 = len(js)
     wait_until(lambda: len(js) >= n0 + 2, 5.0)
-    items = js.snapshot()[n0 + 1:]
     t0 = time.monotonic()
     wait_until(lambda: time.monotonic() - t0 > 2.5, 60.0)  # a 2.5 s window
     items = js.snapshot()[n0 + 1:]

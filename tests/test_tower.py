@@ -265,7 +265,6 @@ def test_kane_with_tower_motion_equals_newton_euler(blades, teeter):
     s = state(t)
     Tt, Y, H = s["Tt"], s["Y"], s["H"]
     w_T, w_Y, w_H = omega("Tt", t), omega("Y", t), omega("H", t)
-    a_T = d2(lambda x: rate("TY", x), t)
     al_T, al_Y, al_H = (d2(lambda x: omega(k, x), t) for k in ("Tt", "Y", "H"))
     a_SH = d2(lambda x: rate("SH", x), t)
     a_cg = d2(lambda x: rate("cg", x), t)

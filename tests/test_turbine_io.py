@@ -1,7 +1,6 @@
 """Tests of the turbine file format: hawt_core.io.turbine_yaml (loader, validation, writer)."""
 from __future__ import annotations
 
-import copy
 import re
 import warnings
 from pathlib import Path
