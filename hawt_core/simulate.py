@@ -1153,9 +1153,11 @@ class Simulator:
         h_nom = self.h
         w_start = self.wall_seconds
         while self.t < t_end - 1e-9 * max(1.0, abs(t_end)):
+            # one decision for full and shortened steps: a step that overshoots t_end by
+            # round-off counts as full (and keeps the window's step size)
             self._steps_wanted = int(math.floor((t_end - self.t) / self.h
                                                 + 1e-9 * max(1.0, abs(t_end))))
-            if self.t + self.h > t_end:
+            if self._steps_wanted == 0:
                 keep = self.h
                 self.h = t_end - self.t
                 self.step()

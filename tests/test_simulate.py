@@ -497,6 +497,32 @@ def test_window_solver_falls_back_to_single_steps():
     assert np.abs((a.y - b.y) / a._scale).max() < 1e-7
 
 
+def test_run_last_step_full_or_shortened():
+    """Reference: run() lands on t_end. A duration of K steps whose summed times overshoot
+    K h by round-off takes K full steps (tolerance: |t - K h| <= 1e-12 K h) from ONE window
+    base (the last step is not shortened by a few ulps, which would force a new dense
+    Jacobian for another step size); a duration of K + 1/2 steps takes K full steps and a
+    shortened one through the step-wise solver, landing on t_end to 1e-12 of it, still from
+    one window base."""
+    model = TurbineModel(paper(N=2))
+    kw = dict(step_deg=2.0, perturb={"teeter": 0.02}, record=False, method="window",
+              window_steps=8)
+    h = Simulator(model, **kw).h
+    K = t = 0
+    while t + h <= (K + 1) * h:          # the first K with (sum of K steps) > K h
+        t, K = t + h, K + 1
+    K += 1
+    assert K < 200
+    for duration, steps in ((K * h, K), ((K + 0.5) * h, K + 1)):
+        sim = Simulator(model, **kw)
+        sim.run(duration)
+        print(f"duration {duration / h:g} steps: {sim.steps} steps, t - t_end "
+              f"{sim.t - duration:.1e} s, {sim._win.refreshes} window bases")
+        assert sim.steps == steps
+        assert abs(sim.t - duration) <= 1e-12 * duration
+        assert sim._win.refreshes == 1 and sim.h == h
+
+
 def test_window_solver_bad_input():
     model = TurbineModel(paper(N=2))
     with pytest.raises(ValueError, match="method: 'fast'"):
