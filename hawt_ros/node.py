@@ -54,7 +54,7 @@ from hawt_msgs.srv import ModalAnalysis as ModalAnalysisSrv
 from .analysis import AnalysisRunner, Job
 from .backend import load_backend
 from .geometry import RotorGeometry
-from .params import (PARAMETERS, RUNTIME_CHANGEABLE, NodeSettings, ParameterError,
+from .params import (PARAMETERS, RUNTIME_CHANGEABLE, ParameterError, settings_from_parameters,
                      validate_parameter, validate_request)
 
 __all__ = ["HawtNode", "main", "JOINT_NAMES", "NODE_NAME"]
@@ -137,10 +137,9 @@ class HawtNode(Node):
             self.declare_parameter(name, default, desc)
             values[name] = self.get_parameter(name).value
         try:
-            kw = {n: validate_parameter(n, v) for n, v in values.items()}
+            self.settings = settings_from_parameters(values)
         except ParameterError as exc:
             raise StartupError(f"parameter {exc}") from None
-        self.settings = NodeSettings(**kw)
         self.declare_parameter(STATUS_PARAM, _stderr_is_tty(),
                                ParameterDescriptor(description=STATUS_DOC, dynamic_typing=True))
         try:
