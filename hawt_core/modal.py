@@ -127,7 +127,7 @@ class ModalResult:
         fl = self.floquet
         rows = fl.sample_rows
         P = np.zeros((len(fl.sample_times), self.model.n), complex)
-        P[:, rows] = fl.periodic_samples[:, :, mode.column]
+        P[:, rows] = fl.periodic_sample(mode.column)
         return fl.sample_times, P
 
     def plot(self, path, modes=None):
@@ -286,7 +286,7 @@ def label_modes(model: TurbineModel, fl, columns) -> list:
         pos = {int(r): j for j, r in enumerate(fl.sample_rows)}
         # rigid rotations: RMS over the revolution of the periodic eigenvector (a teeter
         # oscillating at 1/rev may pass through zero at t = 0), as blade-tip metres
-        rigid = {nm: R * float(np.sqrt(np.mean(np.abs(fl.periodic_samples[:, pos[lay[nm]], i]) ** 2)))
+        rigid = {nm: R * float(np.sqrt(np.mean(np.abs(fl.periodic_sample(i)[:, pos[lay[nm]]]) ** 2)))
                  if lay[nm] in pos else R * abs(x[lay[nm]])
                  for nm in ("yaw", "teeter") if nm in lay}
         elastic = 0.0
@@ -360,7 +360,7 @@ def _family_exponent(model: TurbineModel, fl, i: int, family: str) -> complex:
         return _nonnegative(complex(fl.exponents[i]))
     if not rows:
         return _nonnegative(complex(fl.exponents[i]))
-    P = fl.periodic_samples[:, rows, i]
+    P = fl.periodic_sample(i)[:, rows]
     if wts is not None:
         P = P * wts[None, :]
     M = P.shape[0]
