@@ -573,6 +573,6 @@ class RigidSystem:
         k = self._kin(q, u, t)
         H = k["fr"]["H"]
         w = k["w_H"]
-        I_H = H @ self.hub_inertia @ H.T
-        return (0.5 * (w @ (I_H @ w)) + 0.5 * self.hub_mass * (k["v_SH"] @ k["v_SH"])
+        I_H = H @ self.hub_inertia @ np.swapaxes(H, -1, -2)
+        return (0.5 * _dot(w, _mv(I_H, w)) + 0.5 * self.hub_mass * _dot(k["v_SH"], k["v_SH"])
                 + 0.5 * self.nacelle_yaw_inertia * k["U1"] ** 2)
