@@ -797,15 +797,19 @@ def _consistent_basis(coeffs, h: float, t_end: float, dynamic_dim: Optional[int]
     # leave round-off at 1e-8 .. 1e-10 s0 (the turbine: d and the "no clear gap" warning then
     # depend on the fill-reducing ordering), the low-rank steps at 1e-11 .. 1e-12 s0
     Xs, f1 = _settle(coeffs, h * 1e-2, t_end, lowrank)
-    s_small = np.linalg.svd(Xs[diff], compute_uv=False)
-    d = _numerical_rank(s_small) if dynamic_dim is None else int(dynamic_dim)
+    if dynamic_dim is None:     # the left singular vectors are needed for the check below
+        U_small, s_small, _ = np.linalg.svd(Xs[diff], full_matrices=False)
+        d = _numerical_rank(s_small)
+    else:
+        s_small = np.linalg.svd(Xs[diff], compute_uv=False)
+        d = int(dynamic_dim)
     X, f2 = _settle(coeffs, h, t_end, lowrank, stepper)
     U, s, Vt = np.linalg.svd(X[diff], full_matrices=False)
     Z = X @ (Vt[:d].T / s[:d])
     if d > 0 and dynamic_dim is None:
         # the two subspaces must agree to O(h^q); a large angle means the spurious (hidden
         # constraint) directions of the h-steps outweigh dynamic ones: badly scaled system
-        Us = np.linalg.svd(Xs[diff], full_matrices=False)[0][:, :d]
+        Us = U_small[:, :d]
         ang = np.linalg.norm(Us - U[:, :d] @ (U[:, :d].T @ Us), 2)
         if ang > 1e-2:
             warnings.warn(f"consistent subspace: step-size dependent by {ang:.1e}; "
