@@ -1070,6 +1070,18 @@ def _real_tol(lam: np.ndarray) -> float:
     return 1e-7 * max(1.0, float(np.max(np.abs(lam), initial=1.0)))
 
 
+def _dominant_harmonic(energy: np.ndarray, k: np.ndarray, freq0: float, w0: float,
+                       tie: float) -> int:
+    """Position in ``k`` (integer harmonics) of the dominant harmonic: the largest ``energy``;
+    candidates within 1e-6 (relative) of it tie, and ties (real eigenvectors) prefer the
+    non-negative frequency ``freq0 + k w0`` (negative: below ``-tie * w0``), then the
+    smallest |frequency|."""
+    cand = np.flatnonzero(energy >= energy.max() * (1.0 - 1e-6))
+    freqs = freq0 + k[cand] * w0
+    best = min(range(cand.size), key=lambda j: (freqs[j] < -tie * w0, abs(freqs[j])))
+    return int(cand[best])
+
+
 def floquet_analysis(dae: LinearPeriodicDAE, method: str = "radau", steps: Optional[int] = None,
                      fast: Optional[bool] = None, samples: int = 128, observed=None,
                      weights=None, coefficients="fourier", harmonics="auto",
@@ -1153,14 +1165,8 @@ def floquet_analysis(dae: LinearPeriodicDAE, method: str = "radau", steps: Optio
     share = np.zeros(len(mus))
     for i in range(len(mus)):
         e = energy[:, i]
-        emax = e.max()
-        cand = np.flatnonzero(e >= emax * (1.0 - 1e-6))
-        freqs = eta0[i].imag + kk[cand] * w0
-        # ties (real eigenvectors): prefer non-negative frequency, then the smallest
-        order = sorted(range(cand.size), key=lambda j: (freqs[j] < -1e-12 * w0, abs(freqs[j])))
-        kb = cand[order[0]]
-        harm[i] = kk[kb]
-        share[i] = emax / max(e.sum(), 1e-300)
+        harm[i] = kk[_dominant_harmonic(e, kk, eta0[i].imag, w0, tie=1e-12)]
+        share[i] = e.max() / max(e.sum(), 1e-300)
     eta = eta0 + 1j * harm * w0
     # build the full list: uppers, their conjugates, reals
     idx_up = np.arange(nu)

@@ -36,7 +36,7 @@ from scipy.optimize import linear_sum_assignment
 
 from .assembly import TurbineModel
 from .blade_modes import FAMILIES, classify_energy, deflate_infinite, equilibrate
-from .floquet import LinearPeriodicDAE, floquet_analysis
+from .floquet import LinearPeriodicDAE, _dominant_harmonic, floquet_analysis
 from .model import Turbine
 from .periodic import periodic_steady_state
 
@@ -367,10 +367,8 @@ def _family_exponent(model: TurbineModel, fl, i: int, family: str) -> complex:
     energy = (np.abs(np.fft.fft(P, axis=0) / M) ** 2).sum(1)
     k = np.fft.fftfreq(M, 1.0 / M).astype(int)
     eta = complex(fl.exponents[i])
-    cand = np.flatnonzero(energy >= energy.max() * (1 - 1e-6))
-    freqs = eta.imag + k[cand] * fl.omega
-    best = min(range(len(cand)), key=lambda j: (freqs[j] < -1e-9 * fl.omega, abs(freqs[j])))
-    return _nonnegative(eta + 1j * k[cand[best]] * fl.omega)
+    best = _dominant_harmonic(energy, k, eta.imag, fl.omega, tie=1e-9)
+    return _nonnegative(eta + 1j * k[best] * fl.omega)
 
 
 def _nonnegative(eta: complex) -> complex:
