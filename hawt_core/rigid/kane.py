@@ -182,15 +182,14 @@ class RigidSystem:
         #: True when the tower is a flexible beam: the tower-top motion (6 more generalized
         #: speeds, values taken from the tower's tip node) enters everything
         self.flexible_tower = turbine.tower is not None
-        self.nacelle_mass = float(getattr(nac, "mass", 0.0))
-        c = getattr(nac, "cg_offset", None)
+        self.nacelle_mass = float(nac.mass)
         #: nacelle mass centre relative to the tower-top point TY, in Y (y1 up, y2, y3 shaft)
-        self.nacelle_cg = np.zeros(3) if c is None else np.array(c, float).reshape(3)
+        self.nacelle_cg = np.array(nac.cg_offset, float).reshape(3)
         i_yaw_cg = self.nacelle_yaw_inertia - self.nacelle_mass * (self.nacelle_cg[1] ** 2
                                                                      + self.nacelle_cg[2] ** 2)
         #: nacelle body inertia about its mass centre, Y basis (yaw, pitch about y2, roll about y3)
-        self.nacelle_inertia = np.diag([i_yaw_cg, float(getattr(nac, "inertia_pitch", 0.0)),
-                                        float(getattr(nac, "inertia_roll", 0.0))])
+        self.nacelle_inertia = np.diag([i_yaw_cg, float(nac.inertia_pitch),
+                                        float(nac.inertia_roll)])
         if self.flexible_tower and i_yaw_cg < 0:
             raise ValueError(
                 "nacelle.yaw_inertia: %g kg m^2 is not allowed with this hub and nacelle mass "
@@ -290,7 +289,6 @@ class RigidSystem:
         # batch shapes: scalars (...), vectors (..., 3); U1c, U2c broadcast against vectors
         U1c, U2c = np.asarray(U1)[..., None], np.asarray(U2)[..., None]
         w_Y = U1c * y1
-        w_S = w_Y + self.omega0 * s3
         y1h2 = _dot(y1, h2)               # = y1 . s2
         # partial angular velocities of H (rows: U1, U2) and the remainder, (..., 2, 3)
         if self.teeter:
@@ -307,7 +305,7 @@ class RigidSystem:
                                                rho[..., None, :, :])     # (..., 2, Nb, 3)
         v_P = v_SH[..., None, :] + _cross(w_H[..., None, :], rho)
         return dict(qy=qy, qh=qh, U1=U1, U2=U2, fr=fr, y1=y1, s3=s3, h2=h2, y1h2=y1h2,
-                    w_Y=w_Y, w_S=w_S, w_H=w_H, wr_H=wr_H, wr_S=wr_S,
+                    w_Y=w_Y, w_H=w_H, wr_H=wr_H, wr_S=wr_S,
                     vr_SH=vr_SH, v_SH=v_SH, vr_P=vr_P, v_P=v_P, rho=rho)
 
     # ------------------------------------------------------------------ flexible tower
@@ -354,14 +352,13 @@ class RigidSystem:
         b = [Tt[:, j] for j in range(3)]                       # tower-top basis in N
         wr_Y = np.array([y1, z, z, z, z] + b)
         wr_H = np.array([wr1, wr2, z, z, z] + b)
-        wr_S = np.array([y1, z, z, z, z] + b)
         vr_SH = np.array([_cross(y1, r_SH), z] + b + [_cross(bj, r_SH) for bj in b])
         vr_c = np.array([_cross(y1, r_c), z] + b + [_cross(bj, r_c) for bj in b])
         vr_P = vr_SH[:, None, :] + _cross(wr_H[:, None, :], rho[None, :, :])   # (8, Nb, 3)
         return dict(qy=qy, qh=qh, U1=U1, U2=U2, fr=fr, tw=tw, Tt=Tt, y1=y1, s3=s3, h2=h2,
                     y1h2=y1h2, w_T=w_T, v_T=v_T, w_Y=w_Y, w_H=w_H, wr1=wr1, wr2=wr2,
                     r_SH=r_SH, r_c=r_c, v_SH=v_SH, v_P=v_P, rho=rho, wr_Y=wr_Y, wr_H=wr_H,
-                    wr_S=wr_S, vr_SH=vr_SH, vr_c=vr_c, vr_P=vr_P)
+                    vr_SH=vr_SH, vr_c=vr_c, vr_P=vr_P)
 
     def _kane_tower(self, q, u, udot, t, Fb, Mb, tower):
         """Kane's F_r + F_r* for z = (U1, U2, V_1..3, Omega_1..3) with a flexible tower."""
@@ -409,7 +406,9 @@ class RigidSystem:
         if self.teeter:
             qhdot = U1 * k["y1h2"] - U2
             tau = (self.k_teeter * qh + self.c_teeter * qhdot) * h2   # on H, reaction on S
-            F = F + (k["wr_H"] - k["wr_S"]) @ tau
+            # S turns relative to Y only by the prescribed azimuth: its partial angular
+            # velocities are Y's
+            F = F + (k["wr_H"] - k["wr_Y"]) @ tau
         res = F + Fstar
         return np.concatenate([self._join(res[0], res[1]), res[2:]])
 
