@@ -425,14 +425,14 @@ class HawtNode(Node):
         try:
             named = self.sim.named()
             defl = self.sim.blade_deflections()
-            q, u = self._rigid_state(named)
-            azimuth = float(named.get("azimuth", self.omega * t))
+            azimuth = float(named["azimuth"])
+            yaw, teeter = float(named["yaw"]), float(named["teeter"])
+            yaw_rate, teeter_rate = float(named["yaw_rate"]), float(named["teeter_rate"])
             stations = np.array([d["stations"] for d in defl], float)
             disp = np.array([d["u"] for d in defl], float)
             rot = np.array([d["theta"] for d in defl], float)
             rf = np.array([d["root_force"] for d in defl], float)
             rm = np.array([d["root_moment"] for d in defl], float)
-            qd = self.model.rigid.qdot(q, u, t) if len(q) else np.zeros(0)
             loads = self.geometry.loads(named, t, rf, rm)
             points = self.geometry.blade_points(named, t, stations, disp,
                                                 self.settings.marker_frame)
@@ -440,8 +440,6 @@ class HawtNode(Node):
             self._fail(f"reading the simulation state at t = {t:.6f} s failed: "
                        f"{type(exc).__name__}: {exc}")
             return False
-        yaw, teeter = self._split(q, named)
-        yaw_rate, teeter_rate = self._split(qd, None)
         values = [t, azimuth, yaw, teeter, yaw_rate, teeter_rate, *loads]
         if not _finite(values, stations, disp, rot, rf, rm, points):
             self._fail(f"non-finite simulation state at t = {t:.6f} s (nothing published)")
@@ -490,27 +488,6 @@ class HawtNode(Node):
         self.last_state = (time.monotonic(), t, yaw, teeter, float(disp[0, -1, 2]),
                            float(disp[0, -1, 1]))
         return True
-
-    def _rigid_state(self, named):
-        """(q, u) of the rigid system from sim.y and the model's named layout."""
-        lay = self.model.layout
-        rig = self.model.rigid
-        y = np.asarray(self.sim.y, float)
-        q = np.array([y[lay[n]] for n in rig.coordinates], float)
-        u = np.array([y[lay[n]] for n in rig.speeds], float)
-        return q, u
-
-    def _split(self, x, named):
-        """(yaw part, teeter part) of a rigid coordinate-like vector (0 for removed DOFs)."""
-        rig = self.model.rigid
-        a = b = 0.0
-        i = 0
-        if "yaw" in rig.coordinates:
-            a = float(x[i])
-            i += 1
-        if "teeter" in rig.coordinates:
-            b = float(x[i])
-        return a, b
 
     # ================================================================== parameters
     def _on_set_parameters(self, params: List[Parameter]) -> SetParametersResult:

@@ -7,7 +7,7 @@ from the environment (so they reach the node's process and its analysis workers)
 
 * HAWT_FAKE_STEP_COST   seconds of CPU burnt per Simulator.step() (default 0)
 * HAWT_FAKE_FAIL_AT     simulation time [s] at which step() raises SimulationError
-* HAWT_FAKE_NAN_AT      simulation time [s] from which named() returns NaN (a bad simulator)
+* HAWT_FAKE_NAN_AT      simulation time [s] from which the teeter angle is NaN (a bad simulator)
 * HAWT_FAKE_MODAL_SECONDS  CPU seconds a fake modal analysis burns (default 0.3), in 20 slices
                            with progress and cancel checks between them
 """
@@ -68,10 +68,22 @@ class Simulator:
         self.steps += 1
         self._sync_y()
 
+    def _motion(self):
+        """The analytic rigid motion at self.t: yaw, yaw_rate, teeter, teeter_rate."""
+        t, w = self.t, self.omega
+        a = self.perturb.get("teeter", 0.01)
+        yr = self.perturb.get("yaw_rate", 0.0)
+        out = {"yaw": self.perturb.get("yaw", 0.0) + yr * t + 0.001 * math.sin(2 * w * t),
+               "yaw_rate": yr + 0.002 * w * math.cos(2 * w * t),
+               "teeter": a * math.cos(w * t), "teeter_rate": -a * w * math.sin(w * t)}
+        if self._nan_at is not None and t >= self._nan_at:
+            out["teeter"] = float("nan")
+        return out
+
     def _sync_y(self):
         """Write the rigid coordinates/speeds into y at the model's layout indices."""
         lay, rig = self.model.layout, self.model.rigid
-        n = self.named()
+        n = self._motion()
         psi = self.omega * self.t
         vals = {"yaw": n["yaw"], "yaw_rate": n["yaw_rate"], "teeter": n["teeter"],
                 "teeter_speed": -n["teeter_rate"] - math.sin(psi) * n["yaw_rate"]}
@@ -79,15 +91,17 @@ class Simulator:
             self.y[lay[name]] = vals[name]
 
     def named(self):
-        t, w = self.t, self.omega
-        a = self.perturb.get("teeter", 0.01)
-        yr = self.perturb.get("yaw_rate", 0.0)
-        out = {"time": t, "azimuth": w * t,
-               "yaw": self.perturb.get("yaw", 0.0) + yr * t + 0.001 * math.sin(2 * w * t),
-               "yaw_rate": yr + 0.002 * w * math.cos(2 * w * t),
-               "teeter": a * math.cos(w * t), "teeter_rate": -a * w * math.sin(w * t)}
-        if self._nan_at is not None and t >= self._nan_at:
-            out["teeter"] = float("nan")
+        """As hawt_core.simulate.Simulator.named(): time, azimuth in [0, 2 pi), yaw and teeter
+        from y, their rates from the model's rigid.qdot; locked DOFs report 0."""
+        m, lay = self.model, self.model.layout
+        nq, nr = m.nq, m.nq + m.nu
+        qd = np.real(m.rigid.qdot(self.y[:nq], self.y[nq:nr], self.t)) if nq else np.zeros(0)
+        out = {"time": self.t, "azimuth": (self.omega * self.t) % (2 * math.pi), "yaw": 0.0,
+               "yaw_rate": 0.0, "teeter": 0.0, "teeter_rate": 0.0}
+        for name in ("yaw", "teeter"):
+            if name in lay:
+                out[name] = float(self.y[lay[name]])
+                out[name + "_rate"] = float(qd[lay[name]])
         return out
 
     def blade_deflections(self):
