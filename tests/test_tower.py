@@ -29,6 +29,7 @@ from hawt_core.modal import modal_analysis
 from hawt_core.model import Beam, Gravity, SectionTable
 from hawt_core.rigid import RigidSystem
 from hawt_core.rigid.kane import rot1, rot2, rot3, tip_basis
+from shared_results import paper_modal_analysis
 
 PAPER = load_turbine()
 
@@ -359,7 +360,7 @@ def test_very_stiff_tower_reproduces_the_rigid_tower_table2():
     2e-4 per-rev at 34/rev, and the teeter pair's +-0.045) within 2e-5 per-rev (8e-8 seen;
     the stiff tower rows' conditioning can move the dissipation of the 34/rev modes by ~1e-5);
     the tower modes lie far above the temporal resolution (not reported)."""
-    rigid = modal_analysis(PAPER, elements=4, steps=400)
+    rigid = paper_modal_analysis()     # modal_analysis(PAPER, elements=4, steps=400)
     T = dc.replace(PAPER, tower=_tower(20.0, 1000.0, 1e16, 1e16, 1e16, 500.0, 2, False))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")      # conditioning note of the stiff tower rows
@@ -409,7 +410,7 @@ def test_flexible_tower_couples_with_the_rotor(soft_tower_turbine):
         assert low < m.frequency_per_rev < high, (direction, m.frequency_per_rev, low, high)
         assert abs(m.damping_ratio) < 1e-6
     assert res.find("tower", "torsion", 1).frequency_per_rev > 10
-    rigid = modal_analysis(PAPER, elements=4, steps=400)
+    rigid = paper_modal_analysis()     # modal_analysis(PAPER, elements=4, steps=400)
     for key in (("torsion", "symmetric", 1), ("torsion", "symmetric", 2),
                 ("flap", "antisymmetric", 2)):
         assert res.find(*key).frequency_per_rev == pytest.approx(
