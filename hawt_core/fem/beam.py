@@ -27,9 +27,12 @@ All arithmetic is complex-safe (complex-step Jacobians).
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
-from .sections import ElementProperties
+if TYPE_CHECKING:  # a run-time import would be circular: sections uses rigid.kane's rot1
+    from .sections import ElementProperties
 
 #: Offsets inside the per-element block of 18 unknowns.
 F_, M_, U_, TH_, V_, OM_ = (slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12),
@@ -50,6 +53,18 @@ def dot(a, b):
     """Dot product on the last axis with broadcasting (einsum: ~3x faster than
     ``(a * b).sum(-1)``, whose reduction over a length-3 axis is slow)."""
     return np.einsum("...i,...i->...", a, b)
+
+
+def _levi_civita_9() -> np.ndarray:
+    eps = np.zeros((3, 3, 3))
+    for i, j, k in ((0, 1, 2), (1, 2, 0), (2, 0, 1)):
+        eps[i, j, k], eps[i, k, j] = 1.0, -1.0
+    return np.ascontiguousarray(eps.transpose(1, 2, 0).reshape(9, 3))
+
+
+#: (9, 3) Levi-Civita table: ``cross(a, b)_i = sum_jk eps_ijk a_j b_k``, i.e. the outer
+#: product (a_j b_k) flattened over (j, k), times this (one small matmul per cross product)
+LEVI_CIVITA_9 = _levi_civita_9()
 
 
 def rot_T_apply(theta, a):
@@ -178,11 +193,6 @@ class BeamElements:
                         + np.arange(6)[None, :])                   # (N, 6) of F, M
         self._muT = np.ascontiguousarray(self.props.mass.transpose(0, 2, 1))
         self._RT = np.ascontiguousarray(self.R.transpose(0, 2, 1))  # (N, 6, 6)
-        eps = np.zeros((3, 3, 3))
-        for i, j, k in ((0, 1, 2), (1, 2, 0), (2, 0, 1)):
-            eps[i, j, k], eps[i, k, j] = 1.0, -1.0
-        #: cross(a, b)_i = sum_jk eps_ijk a_j b_k = (a (x) b).ravel() @ E9
-        self._E9 = np.ascontiguousarray(eps.transpose(1, 2, 0).reshape(9, 3))
         self._XE1 = np.zeros((N, G, 1, 3))
         self._XE1[..., 0, 0] = self.xg
         self._mxi4 = self.m_xi[:, None, None, :, None]            # (N, 1, 1, 3, 1)
@@ -225,7 +235,7 @@ class BeamElements:
         # products below (on the strided view they are 2x slower)
         thg = np.ascontiguousarray(thg)
         udg, thdg = a[..., 12:15], a[..., 15:18]
-        E9 = self._E9
+        E9 = LEVI_CIVITA_9
 
         big = B * N > self.BIG
 

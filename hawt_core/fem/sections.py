@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model import Beam, SectionTable
+from ..rigid.kane import rot1
 
 
 def skew(a: np.ndarray) -> np.ndarray:
@@ -28,15 +29,6 @@ def skew(a: np.ndarray) -> np.ndarray:
     return np.stack([np.stack([z, -a[..., 2], a[..., 1]], -1),
                      np.stack([a[..., 2], z, -a[..., 0]], -1),
                      np.stack([-a[..., 1], a[..., 0], z], -1)], -2)
-
-
-def rot1(angle: np.ndarray) -> np.ndarray:
-    """Rotation matrices about axis 1 by ``angle`` (...,) [rad]: columns are the turned axes."""
-    c, s = np.cos(angle), np.sin(angle)
-    one, zero = np.ones_like(c), np.zeros_like(c)
-    return np.stack([np.stack([one, zero, zero], -1),
-                     np.stack([zero, c, -s], -1),
-                     np.stack([zero, s, c], -1)], -2)
 
 
 def station_compliance(t: SectionTable) -> np.ndarray:

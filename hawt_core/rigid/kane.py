@@ -76,6 +76,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..fem.beam import LEVI_CIVITA_9, dot as _dot
+
 __all__ = ["RigidSystem", "rot1", "rot2", "rot3", "tip_basis"]
 
 
@@ -89,24 +91,12 @@ def tip_basis(theta) -> np.ndarray:
 
 
 
-_LEVI_CIVITA_9 = np.zeros((3, 3, 3))
-_LEVI_CIVITA_9[0, 1, 2] = _LEVI_CIVITA_9[1, 2, 0] = _LEVI_CIVITA_9[2, 0, 1] = 1.0
-_LEVI_CIVITA_9[0, 2, 1] = _LEVI_CIVITA_9[2, 1, 0] = _LEVI_CIVITA_9[1, 0, 2] = -1.0
-#: (9, 3): (a_i b_j) flattened over (i, j) times this = a x b
-_LEVI_CIVITA_9 = _LEVI_CIVITA_9.transpose(1, 2, 0).reshape(9, 3)
-
-
 def _cross(a, b):
     """Cross product on the last axis with broadcasting (complex-safe): the outer product
     contracted with the Levi-Civita tensor, one matmul (for 3-vectors several times faster
     than np.cross, which dominates the cost of this module otherwise)."""
     p = np.asarray(a)[..., :, None] * np.asarray(b)[..., None, :]
-    return p.reshape(p.shape[:-2] + (9,)) @ _LEVI_CIVITA_9
-
-
-def _dot(a, b):
-    """Dot product on the last axis with broadcasting."""
-    return np.einsum("...i,...i->...", a, b)
+    return p.reshape(p.shape[:-2] + (9,)) @ LEVI_CIVITA_9
 
 
 def _mv(M, v):
