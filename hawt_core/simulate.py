@@ -790,10 +790,12 @@ class Simulator:
         ~2x better than quadratic and the AR predictor ~30x (7e-6 vs 2.4e-4 scaled, N = 4,
         1 degree): then most steps converge in ONE Newton iteration."""
         # all candidates are computed (and scored) on every 8th step and while the errors
-        # are unknown; otherwise only the chosen one per group
+        # are unknown; otherwise only the chosen one per group, and with adaptive steps the
+        # quadratic one of the differential group (for the error estimate, _error)
         best = {key: self._best_candidate(key) for key in ("d", "a")}
         trial = trial or self.steps % 8 == 0 or None in best.values()
-        want = lambda key, k: trial or best[key] == k
+        want = lambda key, k: trial or best[key] == k or (self.adaptive and key == "d"
+                                                          and k == 2)
         cands = {"d": [None] * 4, "a": [None] * 4}
         g = self._grid[-3:]
         ts = np.array([a for a, _ in g])
@@ -967,7 +969,7 @@ class Simulator:
                 x, its, dn, why = self._newton(yn, tn, h, x0)
             if x is not None:
                 if self.adaptive:
-                    err = self._error(x, x0, h)
+                    err = self._error(x)
                     if err > 1.0 and h > 1e-6 * self._h_nominal():
                         self.rejected_steps += 1
                         h = h * max(0.2, 0.9 * err ** (-1 / 3))
@@ -1125,14 +1127,17 @@ class Simulator:
     def _h_nominal(self):
         return self.h
 
-    def _error(self, x, x0, h):
-        """Local error estimate (Milne): the predictor (quadratic extrapolation) and the
-        midpoint corrector differ by about 25x the midpoint rule's local error."""
-        if len(self._grid) < 3:
+    def _error(self, x):
+        """Local error estimate (Milne): the quadratic extrapolation of the grid values (the
+        degree-2 candidate of :meth:`_predict`, whichever candidate started Newton) and the
+        midpoint corrector differ by about 25x the midpoint rule's local error; 0 without
+        three grid values."""
+        x2 = self._cands["d"][2]
+        if x2 is None:
             return 0.0
         d = self.diff
         sc = self._scale[d]
-        e = (x[d] - x0[d]) / 25.0
+        e = (x[d] - x2) / 25.0
         w = self.rtol * (sc * 1e-3 + np.abs(x[d]))
         return float(np.sqrt(np.mean((e / w) ** 2)))
 
