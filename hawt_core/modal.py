@@ -322,13 +322,8 @@ def label_modes(model: TurbineModel, fl, columns) -> list:
             family = FAMILIES[int(np.argmax(energy))]
             symmetry, phase = _blade_symmetry(bvecs)
         eta = _family_exponent(model, fl, i, family)
-        w0 = fl.omega
         modes.append(Mode(family=family, symmetry=symmetry, index=0,
-                          frequency_per_rev=float(eta.imag / w0),
-                          real_per_rev=float(eta.real / w0),
-                          frequency_hz=float(eta.imag / (2 * np.pi)),
-                          # a zero exponent (free yaw angle) has no damping ratio: report 0
-                          damping_ratio=float(-eta.real / abs(eta)) if abs(eta) > 1e-6 * w0 else 0.0,
+                          **_exponent_fields(eta, fl.omega),
                           blade_phase_deg=phase,
                           participation={**{k: float(v) for k, v in rigid.items()},
                                          **({"tower": tower} if lay.has_tower else {}),
@@ -338,6 +333,15 @@ def label_modes(model: TurbineModel, fl, columns) -> list:
                                              energy)}},
                           column=int(i)))
     return modes
+
+
+def _exponent_fields(eta: complex, w0: float) -> dict:
+    """Mode fields frequency_per_rev, real_per_rev, frequency_hz and damping_ratio of the
+    characteristic exponent ``eta`` [rad/s] at the rotor speed ``w0``."""
+    return {"frequency_per_rev": float(eta.imag / w0), "real_per_rev": float(eta.real / w0),
+            "frequency_hz": float(eta.imag / (2 * np.pi)),
+            # a zero exponent (free yaw angle) has no damping ratio: report 0
+            "damping_ratio": float(-eta.real / abs(eta)) if abs(eta) > 1e-6 * w0 else 0.0}
 
 
 def _family_exponent(model: TurbineModel, fl, i: int, family: str) -> complex:
@@ -485,11 +489,9 @@ def modal_analysis(turbine: Turbine, elements: Optional[int] = None,
         # modes alias onto the unit circle and mix into nearly equal multipliers' eigenvectors
         modes = label_modes(model, ref, [b for _, b in pairs])
         for m, (a, _) in zip(modes, pairs):
-            eta = _family_exponent(model, fl, a, m.family)
-            w0 = fl.omega
-            m.frequency_per_rev, m.real_per_rev = float(eta.imag / w0), float(eta.real / w0)
-            m.frequency_hz = float(eta.imag / (2 * np.pi))
-            m.damping_ratio = float(-eta.real / abs(eta)) if abs(eta) > 1e-6 * w0 else 0.0
+            for name, value in _exponent_fields(_family_exponent(model, fl, a, m.family),
+                                                fl.omega).items():
+                setattr(m, name, value)
             m.column = int(a)
     else:
         modes = label_modes(model, fl, resolved)
