@@ -17,38 +17,14 @@ from hawt_core.fem.sections import mesh_beam
 from hawt_core.jacobian import (ColouredJacobian, block_tridiagonal_pattern,
                                 dense_complex_step)
 from hawt_core.model import Beam, Hub, Nacelle, Rotor, SectionTable, Turbine
+from mesh_study import MESHES, by_family, mesh_study, richardson, solve
 
-MESHES = (8, 16, 32)
 BETA_L = np.array([1.87510407, 4.69409113, 7.85475744])   # clamped-free beam roots
 
 
 def turbine(sec, length=8.42, speed=0.0, radius=0.0, elements=4):
     return Turbine("test", Rotor(speed=speed), Hub(radius=radius), Nacelle(),
                    Beam(length, sec, elements))
-
-
-def solve(T, N, count=30):
-    """Modes at N elements: dense for N < 32, the sparse path (lowest ``count``) beyond."""
-    return blade_modes(T, N, method="sparse" if N >= 32 else "dense", count=count)
-
-
-def by_family(result):
-    out = {}
-    for m in result.modes:
-        out.setdefault(m.family, []).append(m.frequency_rad_s)
-    return {k: np.array(v) for k, v in out.items()}
-
-
-def richardson(f8, f16, f32):
-    """Two-level Richardson extrapolation for an error expansion c2 h^2 + c4 h^4."""
-    r1 = (4 * f16 - f8) / 3
-    r2 = (4 * f32 - f16) / 3
-    return (16 * r2 - r1) / 15
-
-
-def mesh_study(T, family, k, count=30):
-    """Lowest ``k`` frequencies of ``family`` [rad/s] at N = 8, 16, 32 (array (3, k))."""
-    return np.array([by_family(solve(T, N, count))[family][:k] for N in MESHES])
 
 
 def orders(f, exact):

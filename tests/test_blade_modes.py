@@ -16,10 +16,10 @@ import pytest
 from hawt_core import cli
 from hawt_core.blade_modes import blade_modes, frequency_bound, SpinningBlade
 from hawt_core.model import Beam, Hub, Nacelle, Rotor, SectionTable, Turbine
+from mesh_study import mesh_study, richardson
 
 M, L, OMEGA0, E_HUB = 67.5772, 8.42, 6.02, 1.8
 TABLE1 = dict(mass=M, i1=5.0, i2=1e-4, i3=4.9999, gj=21.8e3, ei2=4.36e6, ei3=21.8e6)
-MESHES = (8, 16, 32)
 
 
 def paper(elements=4, **over):
@@ -32,19 +32,6 @@ def first_two(result):
     for m in result.modes:
         fams.setdefault(m.family, []).append(m.frequency_per_rev)
     return {f: np.array(v[:2]) for f, v in fams.items()}
-
-
-def richardson(f8, f16, f32):
-    """Two-level Richardson extrapolation for an error expansion c2 h^2 + c4 h^4."""
-    return (16 * (4 * f32 - f16) / 3 - (4 * f16 - f8) / 3) / 15
-
-
-def family_study(T, family, k, count=30):
-    out = []
-    for N in MESHES:
-        r = blade_modes(T, N, method="sparse" if N >= 32 else "dense", count=count)
-        out.append([m.frequency_rad_s for m in r.modes if m.family == family][:k])
-    return np.array(out)
 
 
 # ---------------------------------------------------------------------------- Table 2
@@ -127,7 +114,7 @@ def test_rotating_uniform_cantilever_flap_wright(lam, ref):
     scale = math.sqrt(ei / (M * L ** 4))
     sec = SectionTable.uniform(**{**TABLE1, "i1": 2e-6, "i2": 1e-6, "i3": 1e-6})
     T = Turbine("rot", Rotor(speed=lam * scale), Hub(radius=0.0), Nacelle(), Beam(L, sec, 4))
-    f = family_study(T, "flap", 3) / scale
+    f = mesh_study(T, "flap", 3) / scale
     e = np.abs(f / np.array(ref) - 1)
     order = np.log2(e[:-1, 1:] / e[1:, 1:])
     assert np.all(np.abs(order - 2) < 0.3), order
@@ -145,7 +132,7 @@ def test_rotating_torsion_on_the_hub():
     i1, i2, i3, gj, om = 5.0, 1e-4, 4.9999, TABLE1["gj"], 10.0
     sec = SectionTable.uniform(**{**TABLE1, "i1": i1, "i2": i2, "i3": i3})
     T = Turbine("tor", Rotor(speed=om), Hub(radius=E_HUB), Nacelle(), Beam(L, sec, 4))
-    f = family_study(T, "torsion", 2)
+    f = mesh_study(T, "torsion", 2)
     w_nr = (2 * np.arange(1, 3) - 1) * np.pi / (2 * L) * np.sqrt(gj / i1)
     exact = np.sqrt(w_nr ** 2 + om ** 2 * (i3 - i2) / i1)
     e = np.abs(f / exact - 1)
