@@ -86,18 +86,13 @@ def q_apply(theta, a):
     return a + 0.5 * cross(theta, a) + 0.25 * theta * dot(theta, a)[..., None]
 
 
-def rotation_matrix(theta):
-    """C(theta) as matrices (..., 3, 3) (for post-processing)."""
-    eye = np.eye(3)
-    return np.stack([rot_apply(theta, eye[k]) for k in range(3)], -1)
-
-
 class BeamElements:
     """The discretized beam operator for ``B`` identical beams sharing one mesh.
 
     ``props``: ElementProperties (mesh, 6x6 compliance and mass per element).
-    ``gauss``: number of Gauss points per element (2 integrates the inertia and kinematic
-    terms exactly; 3 is used for the rotation-dependent terms by default).
+    ``gauss``: number of Gauss points per element, the same for every integrated term
+    (default 3: 2 already integrate the inertia and kinematic terms exactly; the third point
+    is for the rotation-dependent terms, which are not polynomial in theta).
     """
 
     #: batch x elements above which cross products use index gathers (fewer flops)
@@ -121,7 +116,6 @@ class BeamElements:
         self.m_vv, self.m_vo = mu[:, :3, :3], mu[:, :3, 3:]
         self.m_ov, self.m_oo = mu[:, 3:, :3], mu[:, 3:, 3:]
         self.mass_per_length = mu[:, 0, 0]
-        # mass-centre offset (for gravity moments): m xi~ = mu_ov
         # m * xi (mass-centre offset times mass), read off mu_ov = m xi~ (for gravity moments)
         self.m_xi = np.stack([mu[:, 5, 1], mu[:, 3, 2], mu[:, 4, 0]], -1)
         self.R = props.compliance
@@ -149,24 +143,6 @@ class BeamElements:
         V = np.concatenate([root[:, None, ROOT_V], blk[:, :, V_]], 1)
         Om = np.concatenate([root[:, None, ROOT_OM], blk[:, :, OM_]], 1)
         return u, th, V, Om, blk[:, :, F_], blk[:, :, M_]
-
-    def _at_gauss(self, a):
-        """Linear interpolation of nodal (B, N+1, 3) to Gauss points (B, N, G, 3)."""
-        return (a[:, :-1, None, :] * (1 - self.eta)[None, None, :, None]
-                + a[:, 1:, None, :] * self.eta[None, None, :, None])
-
-    def _to_nodes(self, integrand):
-        """Hat-function weighted integrals of a Gauss-point field (B,N,G,3) -> (B, N+1, 3)."""
-        ia = np.einsum("bngk,ng->bnk", integrand, self.wa)
-        ib = np.einsum("bngk,ng->bnk", integrand, self.wb)
-        z = np.zeros_like(ia[:, :1])
-        return np.concatenate([ia, z], 1) + np.concatenate([z, ib], 1)
-
-    def _const_to_nodes(self, c):
-        """Hat-weighted integrals of an element-constant field (B,N,3) -> (B,N+1,3)."""
-        half = 0.5 * self.h[None, :, None] * c
-        z = np.zeros_like(half[:, :1])
-        return np.concatenate([half, z], 1) + np.concatenate([z, half], 1)
 
     # ------------------------------------------------------------------ residual
     def _precompute(self):

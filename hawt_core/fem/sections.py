@@ -141,14 +141,13 @@ class ElementProperties:
     """Per-element data of a meshed beam.
 
     nodes: span coordinates of the N+1 nodes [m]; h: element lengths (N,) [m];
-    compliance: (N, 6, 6); mass: (N, 6, 6); rigid: bool (3,) for the force strains.
+    compliance: (N, 6, 6); mass: (N, 6, 6).
     """
 
     nodes: np.ndarray
     h: np.ndarray
     compliance: np.ndarray
     mass: np.ndarray
-    rigid: np.ndarray
 
     @property
     def n_elements(self) -> int:
@@ -164,5 +163,4 @@ def mesh_beam(beam: Beam, elements: int | None = None) -> ElementProperties:
     st = beam.sections.stations * beam.length
     comp = element_compliance(beam.sections, beam.length, nodes)
     mass = element_average(st, station_mass(beam.sections), nodes)
-    rigid = np.array([np.all(np.abs(comp[:, k, :]) == 0) for k in range(3)])
-    return ElementProperties(nodes=nodes, h=np.diff(nodes), compliance=comp, mass=mass, rigid=rigid)
+    return ElementProperties(nodes=nodes, h=np.diff(nodes), compliance=comp, mass=mass)

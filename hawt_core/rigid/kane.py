@@ -90,7 +90,6 @@ def tip_basis(theta) -> np.ndarray:
     return ((1 - s) * np.eye(3) + sk + 0.5 * np.outer(th, th)) / (1 + s)
 
 
-
 def _cross(a, b):
     """Cross product on the last axis with broadcasting (complex-safe): the outer product
     contracted with the Levi-Civita tensor, one matmul (for 3-vectors several times faster
