@@ -422,7 +422,7 @@ def plot_campbell(result, path, max_hz=None, max_rays: int = 12, tracks="table2"
     styles = {"symmetric": "-", "collective": "-", "antisymmetric": "--", "cyclic": "--",
               "differential": "-."}
     markers = {"flap": "o", "lag": "s", "torsion": "^", "teeter": "D", "yaw": "v",
-               "axial": "x", "shear2": "+", "shear3": "+"}
+               "axial": "x", "shear": "+"}
     for i, t in enumerate(tracks):
         ok = t.present()
         if not ok.any() or np.nanmin(t.continuous_hz) > top:
