@@ -49,7 +49,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spl
 
 from .fem.beam import BLOCK_SIZE, ROOT_SIZE
-from .jacobian import ColouredJacobian
+from .jacobian import STEP, ColouredJacobian
 from .window import WindowFailure, WindowSolver
 
 __all__ = ["Simulator", "SimulationError", "NAMED", "consistent_state", "add_cli",
@@ -603,13 +603,14 @@ class Simulator:
 
     # ------------------------------------------------------------------ the step
     def _G(self, x, yn, tm, h):
-        """Midpoint residual of the step unknowns x = [y_{n+1} | z_{n+1/2}] (n,)."""
+        """Midpoint residual of the step unknowns x = [y_{n+1} | z_{n+1/2}] (n,), or of K
+        sets of them (K, n) (same step: one batched residual evaluation)."""
         d = self._di
-        xd = x[d]
+        xd = x[..., d]
         ydot = np.zeros(x.shape, dtype=x.dtype)
-        ydot[d] = (xd - yn) / h
+        ydot[..., d] = (xd - yn) / h
         ym = x.copy()
-        ym[d] = 0.5 * (xd + yn)
+        ym[..., d] = 0.5 * (xd + yn)
         return self.model.residual(ydot, ym, tm)
 
     def _refresh_jacobian(self, x, yn, tm, h):
@@ -693,18 +694,14 @@ class Simulator:
 
     def _low_rank_update(self, x, yn, tm, h):
         """Exact rigid rows and columns of the Newton matrix at x (complex steps of G along
-        the rigid unknowns and the columns of the rigid rows: ``nq + nu + len(kc)`` residual
-        evaluations instead of a full Jacobian), stored as a snapshot; see
-        :meth:`_set_woodbury` for how the snapshots update the stored LU."""
+        the rigid unknowns and the columns of the rigid rows: ONE batched residual evaluation
+        of ``nq + nu + len(kc)`` instants instead of a full Jacobian), stored as a snapshot;
+        see :meth:`_set_woodbury` for how the snapshots update the stored LU."""
         w0 = time.perf_counter()
-        from .jacobian import STEP
         cols = np.concatenate([self._rc, self._kc])
-        xc = x.astype(complex)
-        Jc = np.empty((self.n, len(cols)))
-        for i, j in enumerate(cols):
-            xc[j] += 1j * STEP
-            Jc[:, i] = self._G(xc, yn, tm, h).imag / STEP
-            xc[j] = x[j]
+        xc = np.tile(x.astype(complex), (len(cols), 1))
+        xc[np.arange(len(cols)), cols] += 1j * STEP
+        Jc = self._G(xc, yn, tm, h).imag.T / STEP
         self.residual_evaluations += len(cols)
         self._add_snapshot(tm, h, Jc)
         self.low_rank_updates += 1
