@@ -397,11 +397,9 @@ def plot_campbell(result, path, max_hz=None, max_rays: int = 12, tracks="table2"
     if tracks == "all":
         tracks = list(result.tracks)
     elif tracks == "table2":
-        tracks = [t for t in result.tracks
-                  if (t.family in ("yaw", "teeter") or t.index <= 2) and "#" not in t.label
-                  or "#" in t.label and t.label.split(" #")[0] in
-                  {u.label for u in result.tracks if u.family in ("yaw", "teeter")
-                   or u.index <= 2}]
+        # a track labelled "X #k" (a label reused by a later track) has the family and index
+        # of the track "X": mode_label is one-to-one in (family, symmetry, index)
+        tracks = [t for t in result.tracks if t.family in ("yaw", "teeter") or t.index <= 2]
     else:
         wanted = list(tracks)
         tracks = [t for t in result.tracks if t.label in wanted]
