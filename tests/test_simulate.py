@@ -37,6 +37,12 @@ def fit_frequency(t, x, w0):
 
 
 # ---------------------------------------------------------------- energy (Jacobi integral)
+def at_gauss(beam, a):
+    """Linear interpolation of nodal values (B, N+1, 3) to the Gauss points (B, N, G, 3)."""
+    return (a[:, :-1, None, :] * (1 - beam.eta)[None, None, :, None]
+            + a[:, 1:, None, :] * beam.eta[None, None, :, None])
+
+
 def blade_hub_energy(model, y, t):
     """E = hub kinetic energy + blade kinetic energy (3-point Gauss, exact for the linear
     V, Omega) + strain energy 1/2 h kappa^T R_MM^-1 kappa per element, kappa from the
@@ -46,9 +52,9 @@ def blade_hub_energy(model, y, t):
     nr = m.nq + m.nu
     K = rig.hub_kinetic_energy(y[:m.nq], y[m.nq:nr], t)
     u, th, V, Om, F, M = beam.nodal(y[nr:nr + m.n_blades * beam.n].reshape(m.n_blades, beam.n))
-    X = np.concatenate([beam._at_gauss(V), beam._at_gauss(Om)], -1)
+    X = np.concatenate([at_gauss(beam, V), at_gauss(beam, Om)], -1)
     K += 0.5 * np.einsum("bngi,nij,bngj,ng->", X, beam.props.mass, X, beam.wa + beam.wb)
-    thg = beam._at_gauss(th)                                   # (B, N, G, 3)
+    thg = at_gauss(beam, th)                                   # (B, N, G, 3)
     Qg = np.stack([q_apply(thg, e) for e in np.eye(3)], -1)     # (B, N, G, 3, 3)
     Qbar = np.einsum("g,bngij->bnij", beam.w, Qg) * beam.h[None, :, None, None]
     kap = np.linalg.solve(Qbar, (th[:, 1:] - th[:, :-1])[..., None])[..., 0]
