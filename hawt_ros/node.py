@@ -180,13 +180,9 @@ class HawtNode(Node):
         sim_be = load_backend("simulate")
         self.sim_source = sim_be.source
         self._SimulationError = sim_be.SimulationError
-        try:
-            try:   # no time histories: the node runs for hours
-                self.sim = sim_be.Simulator(self.model, step_deg=self.settings.step_deg,
-                                            perturb=dict(self.settings.perturb), record=False)
-            except TypeError:
-                self.sim = sim_be.Simulator(self.model, step_deg=self.settings.step_deg,
-                                            perturb=dict(self.settings.perturb))
+        try:   # no time histories: the node runs for hours
+            self.sim = sim_be.Simulator(self.model, step_deg=self.settings.step_deg,
+                                        perturb=dict(self.settings.perturb), record=False)
         except Exception as exc:  # noqa: BLE001
             raise StartupError(f"simulation set-up failed: {type(exc).__name__}: {exc}") from None
 

@@ -44,8 +44,9 @@ def _env_float(name, default=None):
 class Simulator:
     """Analytic motion with the Simulator API: teeter and yaw oscillate, blades flap."""
 
-    def __init__(self, model, step_deg=1.0, perturb=None):
+    def __init__(self, model, step_deg=1.0, perturb=None, record=True):
         self.model = model
+        self.record = bool(record)       # no histories kept either way
         self.omega = float(model.rotor_speed)
         self.dt = math.radians(step_deg) / self.omega
         self.perturb = dict(perturb or {})
