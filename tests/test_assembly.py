@@ -20,30 +20,32 @@ def _random_state(m, seed=3):
 
 def _variants():
     T = load_turbine()
-    yield T
-    yield dc.replace(T, gravity=Gravity(True, 9.81),
+    yield "paper", T
+    yield "everything-on", dc.replace(T, gravity=Gravity(True, 9.81),
                      rotor=dc.replace(T.rotor, precone=0.05),
                      nacelle=dc.replace(T.nacelle, shaft_tilt=0.1, yaw_stiffness=1e5, yaw_damping=1e3),
                      hub=dc.replace(T.hub, undersling=0.2, teeter_stiffness=1e4, teeter_damping=1e2, mass=300.0))
-    yield dc.replace(T, rotor=dc.replace(T.rotor, blades=3), hub=dc.replace(T.hub, teeter=False))
+    yield "3-blade-rigid-hub", dc.replace(T, rotor=dc.replace(T.rotor, blades=3),
+                                          hub=dc.replace(T.hub, teeter=False))
     # flexible towers (tower unknowns after the blades; tower-top motion in Kane's equations)
     tower = Beam(20.0, SectionTable.uniform(mass=300.0, i1=100.0, i2=50.0, i3=50.0, gj=1e9,
                                             ei2=2e9, ei3=3e9), 3)
-    yield dc.replace(T, tower=tower)
-    yield dc.replace(T, tower=tower, gravity=Gravity(True, 9.81),
+    yield "flexible-tower", dc.replace(T, tower=tower)
+    yield "flexible-tower-everything-on", dc.replace(T, tower=tower, gravity=Gravity(True, 9.81),
                      rotor=dc.replace(T.rotor, precone=0.05),
                      nacelle=dc.replace(T.nacelle, shaft_tilt=0.1, yaw_stiffness=1e5,
                                         yaw_damping=1e3, mass=2000.0, cg_offset=(0.3, 0.2, -0.5),
                                         inertia_pitch=800.0, inertia_roll=600.0),
                      hub=dc.replace(T.hub, undersling=0.2, teeter_stiffness=1e4, teeter_damping=1e2, mass=300.0))
-    yield dc.replace(T, tower=dc.replace(tower, elements=2), rotor=dc.replace(T.rotor, blades=3),
-                     hub=dc.replace(T.hub, teeter=False),
-                     nacelle=dc.replace(T.nacelle, yaw_free=False))
+    yield "flexible-tower-3-blade-no-rigid-dofs", dc.replace(
+        T, tower=dc.replace(tower, elements=2), rotor=dc.replace(T.rotor, blades=3),
+        hub=dc.replace(T.hub, teeter=False), nacelle=dc.replace(T.nacelle, yaw_free=False))
 
 
-@pytest.mark.parametrize("turbine", list(_variants()),
-                         ids=["paper", "everything-on", "3-blade-rigid-hub", "flexible-tower",
-                              "flexible-tower-everything-on", "flexible-tower-3-blade-no-rigid-dofs"])
+VARIANTS = [pytest.param(turbine, id=name) for name, turbine in _variants()]
+
+
+@pytest.mark.parametrize("turbine", VARIANTS)
 def test_structured_jacobians_equal_plain_complex_step(turbine):
     """Structured Jacobians (batched by subsystem) equal the plain coloured complex-step
     Jacobians of the whole residual to round-off (1e-12 relative), and central differences
@@ -145,9 +147,7 @@ def test_periodic_steady_state_free_yaw_gravity():
     assert ps.states[0, m.layout["yaw"]] == pytest.approx(0.0, abs=1e-15)
 
 
-@pytest.mark.parametrize("turbine", list(_variants()),
-                         ids=["paper", "everything-on", "3-blade-rigid-hub", "flexible-tower",
-                              "flexible-tower-everything-on", "flexible-tower-3-blade-no-rigid-dofs"])
+@pytest.mark.parametrize("turbine", VARIANTS)
 def test_batched_residual_equals_one_instant_at_a_time(turbine):
     """Reference: the residual evaluated at one instant at a time (the path the Jacobian,
     steady-state and Floquet tests check against the paper's equations). A batch of K = 5
@@ -169,8 +169,7 @@ def test_batched_residual_equals_one_instant_at_a_time(turbine):
         assert np.abs(R.imag - ref.imag).max() <= 1e-13 * np.abs(ref.imag).max() + 1e-300
 
 
-@pytest.mark.parametrize("turbine", list(_variants())[:3],
-                         ids=["paper", "everything-on", "3-blade-rigid-hub"])
+@pytest.mark.parametrize("turbine", VARIANTS[:3])   # the rigid-tower ones
 def test_coupling_jacobians_equal_plain_complex_step(turbine):
     """Reference: the plain coloured complex-step Jacobians of the whole residual. The
     coupling blocks (every row w.r.t. the rigid unknowns and their rates, the rigid rows
