@@ -987,9 +987,8 @@ class BagWriter:
             self._stop.set()
             try:
                 self._flush_chunk()
-                self._mcap.flush_chunk()
-                self._mcap.add_metadata("rosbag2",
-                                        {"serialized_metadata": self._metadata_yaml()})
+                metadata_yaml = self._metadata_yaml()
+                self._mcap.add_metadata("rosbag2", {"serialized_metadata": metadata_yaml})
                 self._mcap.finish()
             finally:
                 self._closed = True
@@ -997,7 +996,7 @@ class BagWriter:
                 _open_writers.discard(self)
             if self.bag_dir is not None:
                 tmp = self.bag_dir / "metadata.yaml.tmp"
-                tmp.write_text(self._metadata_yaml())
+                tmp.write_text(metadata_yaml)
                 os.replace(tmp, self.bag_dir / "metadata.yaml")
         finally:
             self._owner = None
