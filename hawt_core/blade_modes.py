@@ -124,32 +124,26 @@ def deflate_infinite(A: np.ndarray, E: np.ndarray, rank_tol: float = RANK_TOL):
         m = A.shape[0]
         if m == 0:
             break
+        # the constraint rows C = W^T A and the kept rows P^T A, P^T E of this step
         if first:
             first = False
             nonzero = np.any(E != 0, axis=1)
-            r = int(nonzero.sum())
-            if r == m:
+            if nonzero.sum() == m:
                 break
-            _, sc, Vh = sl.svd(A[~nonzero], full_matrices=True)
-            rc = int((sc > sc[0] * rank_tol).sum()) if sc.size and sc[0] > 0 else 0
-            if rc < m - r:
-                raise SingularPencilError(_SINGULAR)
-            N = Vh[rc:].conj().T
-            A, E, X = A[nonzero] @ N, E[nonzero] @ N, X @ N
-            continue
+            C, PA, PE = A[~nonzero], A[nonzero], E[nonzero]
         else:
             U, s, _ = sl.svd(E)
             r = int((s > s[0] * rank_tol).sum()) if s.size and s[0] > 0 else 0
+            if r == m:
+                break
             P, W = U[:, :r], U[:, r:]
-        if r == m:
-            break
-        C = W.T @ A
+            C, PA, PE = W.T @ A, P.T @ A, P.T @ E
         _, sc, Vh = sl.svd(C)
         rc = int((sc > sc[0] * rank_tol).sum()) if sc.size and sc[0] > 0 else 0
         if rc < C.shape[0]:
             raise SingularPencilError(_SINGULAR)
         N = Vh[rc:].conj().T
-        A, E, X = P.T @ A @ N, P.T @ E @ N, X @ N
+        A, E, X = PA @ N, PE @ N, X @ N
     return A, E, X
 
 
