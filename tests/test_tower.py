@@ -30,6 +30,8 @@ from hawt_core.model import Beam, Gravity, SectionTable
 from hawt_core.rigid import RigidSystem
 from hawt_core.rigid.kane import rot1, rot2, rot3, tip_basis
 from shared_results import paper_modal_analysis
+from tower_turbines import soft_tower_turbine as _soft_tower_turbine
+from tower_turbines import tower_beam as _tower
 
 PAPER = load_turbine()
 
@@ -57,12 +59,6 @@ def rod_tip_inertia(L, I1, GJ, J):
     """First torsion frequency [rad/s] of a clamped rod with a tip inertia J."""
     b = brentq(lambda b: b * L * np.tan(b * L) - I1 * L / J, 1e-9 / L, (0.5 * np.pi - 1e-9) / L)
     return b * np.sqrt(GJ / I1)
-
-
-def _tower(L, m, ei2, ei3, gj, i1, elements, tiny_i23=True):
-    sec = SectionTable.uniform(mass=m, i1=i1, i2=1e-6 if tiny_i23 else i1 / 2,
-                               i3=1e-6 if tiny_i23 else i1 / 2, gj=gj, ei2=ei2, ei3=ei3)
-    return Beam(L, sec, elements)
 
 
 # ---------------------------------------------------------------------------- 1. frequencies
@@ -378,10 +374,7 @@ def test_very_stiff_tower_reproduces_the_rigid_tower_table2():
 def soft_tower_turbine():
     """The paper's rotor (hub 1000 kg, nacelle 3000 kg) on a soft 25 m tower (400 kg/m,
     EI = 6e8 N m^2, GJ = 1.5e9 N m^2)."""
-    return dc.replace(PAPER, tower=_tower(25.0, 400.0, 6e8, 6e8, 1.5e9, 300.0, 4, False),
-                      hub=dc.replace(PAPER.hub, mass=1000.0),
-                      nacelle=dc.replace(PAPER.nacelle, mass=3000.0, inertia_pitch=2000.0,
-                                         inertia_roll=1500.0))
+    return _soft_tower_turbine()
 
 
 def test_flexible_tower_couples_with_the_rotor(soft_tower_turbine):
@@ -423,10 +416,9 @@ def test_flexible_tower_couples_with_the_rotor(soft_tower_turbine):
 
 
 # ---------------------------------------------------------------------------- layout
-def test_tower_layout_names_and_relabelling(soft_tower_turbine):
-    """Tower unknowns follow the blades, named 'tower.u[3].1' etc.; blade relabelling maps
-    the tower to itself, and the equations keep the Fast-Floquet symmetry
-    R(S ydot, S y, t + T/2) = S R(ydot, y, t) with the tower (1e-9)."""
+def test_tower_layout_names(soft_tower_turbine):
+    """Tower unknowns follow the blades, named 'tower.u[3].1' etc.  (The blade relabelling
+    symmetry with this tower: test_assembly.test_blade_relabelling_symmetry_of_the_equations.)"""
     m = TurbineModel(soft_tower_turbine, elements=3)
     names = m.layout.names()
     assert len(names) == m.n == len(set(names))
@@ -438,12 +430,6 @@ def test_tower_layout_names_and_relabelling(soft_tower_turbine):
     assert m.differential.shape == (m.n,)
     with pytest.raises(ValueError, match="rigid"):
         TurbineModel(PAPER, elements=3).layout.tower()
-    S = m.blade_relabelling()
-    rng = np.random.default_rng(7)
-    yd, y = rng.standard_normal(m.n), m.initial_guess() + 1e-2 * rng.standard_normal(m.n)
-    lhs = m.residual(S @ yd, S @ y, 0.21 + m.period / 2)
-    rhs = S @ m.residual(yd, y, 0.21)
-    np.testing.assert_allclose(lhs, rhs, atol=1e-9 * np.abs(rhs).max())
 
 
 # ---------------------------------------------------------------------------- file format
