@@ -124,6 +124,16 @@ class Trajectory:
         return self.qdot(t)[0], w @ Hmat(t)[:, 1]
 
 
+def active_trajectory(rng, t0, ref, r):
+    """A Trajectory that keeps the coordinates ``r`` (RigidSystem) does not have at 0."""
+    tr = Trajectory(rng, t0, ref)
+    if not r.yaw_free:
+        tr.cy[:] = 0.0
+    if not r.teeter:
+        tr.ch[:] = 0.0
+    return tr
+
+
 def omega_of(Bfun, t):
     """Angular velocity (in N) of the basis Bfun(t) (columns = unit vectors)."""
     return axial(cs_dt(Bfun, t) @ Bfun(t).T)
@@ -238,11 +248,7 @@ def _check_root_motion_against_reference(tb, seed, n=8):
     rng = np.random.default_rng(seed)
     for _ in range(n):
         t0 = rng.uniform(0, 3)
-        tr = Trajectory(rng, t0, ref)
-        if not r.yaw_free:
-            tr.cy[:] = 0.0
-        if not r.teeter:
-            tr.ch[:] = 0.0
+        tr = active_trajectory(rng, t0, ref, r)
         qy, qh = tr.q(t0)
         U1, U2 = tr.u(t0)
         q = np.array([qy, qh])[[i for i, f in enumerate((r.yaw_free, r.teeter)) if f]]
@@ -400,11 +406,7 @@ def _newton_euler(tb, seed, n=6):
     rng = np.random.default_rng(seed)
     for _ in range(n):
         t0 = rng.uniform(0, 3)
-        tr = Trajectory(rng, t0, ref)
-        if not r.yaw_free:
-            tr.cy[:] = 0.0
-        if not r.teeter:
-            tr.ch[:] = 0.0
+        tr = active_trajectory(rng, t0, ref, r)
 
         def basesf(tt):
             a, b = tr.q(tt)
@@ -494,12 +496,8 @@ def _lagrange_check(tb, seed, n=4):
                 + 0.5 * mh * vSH @ vSH)
 
     def grad(f, x, h):
-        out = np.zeros(2)
-        for j in range(2):
-            dx = np.zeros(2)
-            dx[j] = h
-            out[j] = (f(x - 2 * dx) - 8 * f(x - dx) + 8 * f(x + dx) - f(x + 2 * dx)) / (12 * h)
-        return out
+        """4th-order central differences (fd4) along each coordinate."""
+        return np.array([fd4(lambda s, e=e: f(x + s * e), 0.0, h) for e in np.eye(2)])
 
     rng = np.random.default_rng(seed)
     for _ in range(n):
