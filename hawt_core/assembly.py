@@ -68,11 +68,8 @@ class StateLayout:
         self.N_tower = tower.N if tower is not None else 0
         self.n += self.n_tower
         self._index = {name: i for i, name in enumerate(self.rigid_names)}
-        aliases = {"yaw_rate": ("yaw_rate", "yaw_speed"), "teeter_rate": ("teeter_speed",)}
-        for alias, names in aliases.items():
-            for nm in names:
-                if nm in self._index:
-                    self._index.setdefault(alias, self._index[nm])
+        if "teeter_speed" in self._index:   # the name simulate's perturbations use
+            self._index["teeter_rate"] = self._index["teeter_speed"]
         self._blades = [self._blade_layout(k) for k in range(n_blades)]
         self._tower = (self._blade_layout(None) if tower is not None else None)
 
@@ -123,21 +120,8 @@ class StateLayout:
     def names(self) -> list:
         out = list(self.rigid_names)
         for k in range(self.n_blades):
-            bl = self._blades[k]
-            loc = [""] * self.n_beam
-            off = self.blade_offset(k)
-            for field in ("u", "theta", "V", "Omega", "F", "M"):
-                idx = getattr(bl, field)
-                for i, row in enumerate(idx):
-                    for c, j in enumerate(row):
-                        if j >= 0:
-                            lbl = f"{field}[{i + (field in ('F', 'M'))}]" if field in ("F", "M") \
-                                else f"{field}[{i}]"
-                            loc[j - off] = f"blade{k}.{lbl}.{c + 1}"
-            for c in range(3):
-                loc[c] = f"blade{k}.root_force.{c + 1}"
-                loc[3 + c] = f"blade{k}.root_moment.{c + 1}"
-            out += loc
+            out += self._beam_names(self._blades[k], self.blade_offset(k), self.n_beam,
+                                    f"blade{k}")
         if self._tower is not None:
             out += self._beam_names(self._tower, self.tower_offset, self.n_tower, "tower")
         return out
@@ -184,14 +168,17 @@ class TurbineModel:
             [np.ones(self.nq + self.nu, bool), np.tile(self.beam.differential, self.n_blades)]
             + ([self.tower.differential] if self.tower is not None else []))
         self.gravity = bool(turbine.gravity.enabled)
+        #: columns of the blades' root loads (F0, M0 of blade 0, then blade 1, ...): the only
+        #: blade unknowns the rigid rows depend on
+        self._root_cols = np.concatenate([self.layout.blade_offset(k) + np.arange(6)
+                                          for k in range(self.n_blades)])
+        self._root_cols.setflags(write=False)
         if self.tower is not None:
-            to, Nt = self.layout.tower_offset, self.tower.N
-            last = to + ROOT_SIZE + (Nt - 1) * BLOCK_SIZE   # the tip node's element block
-            #: tower tip unknowns: theta, V, Omega (each 3), and the tip equilibrium rows
-            self._tip_theta = last + np.arange(9, 12)
-            self._tip_V = last + np.arange(12, 15)
-            self._tip_Om = last + np.arange(15, 18)
-            self._tip_rows = last + np.arange(6, 12)
+            tl = self.layout.tower()
+            #: tower tip unknowns: theta, V, Omega (each 3), and the tip equilibrium rows (in
+            #: BeamElements' block order they sit where the tip's u, theta unknowns are)
+            self._tip_theta, self._tip_V, self._tip_Om = tl.theta[-1], tl.V[-1], tl.Omega[-1]
+            self._tip_rows = np.concatenate([tl.u[-1], tl.theta[-1]])
             self._tower_g = np.array([[-float(turbine.gravity.g), 0.0, 0.0]]) \
                 if self.gravity else None
             self._tower_jac = ColouredJacobian(
@@ -273,17 +260,14 @@ class TurbineModel:
         P = sp.lil_matrix((self.n, self.n), dtype=bool)
         P[:, :nr] = True                    # rigid unknowns enter every row (root motion)
         P[:nr, :nr] = True
-        for k in range(self.n_blades):
-            off = self.layout.blade_offset(k)
-            P[:nr, off:off + 6] = True      # root loads enter the rigid dynamics
+        P[:nr, self._root_cols] = True      # root loads enter the rigid dynamics
         blocks = [sp.csr_matrix((nr, nr), dtype=bool)] + [blade] * self.n_blades
         if self.tower is not None:
             tip = np.concatenate([self._tip_theta, self._tip_V, self._tip_Om])
             to = self.layout.tower_offset
             P[:to, tip] = True                # tower-top motion: rigid rows and blade rows
-            for k in range(self.n_blades):    # blade root loads -> tower-top loads
-                off = self.layout.blade_offset(k)
-                P[self._tip_rows[:, None], off + np.arange(6)[None, :]] = True
+            # blade root loads -> tower-top loads
+            P[self._tip_rows[:, None], self._root_cols[None, :]] = True
             blocks.append(block_tridiagonal_pattern(self.tower.pattern_blocks()))
         P = sp.csr_matrix(P)
         P = P + sp.block_diag(blocks, format="csr")
@@ -301,29 +285,16 @@ class TurbineModel:
         ydot = np.asarray(ydot, float)
         if self.tower is not None:
             return self._jacobians_tower(ydot, y, t)
-        h = STEP
         nq, nu, nr, nb, nbl = self.nq, self.nu, self.nq + self.nu, self.n_blades, self.beam.n
         q, u, qd, ud = y[:nq], y[nq:nr], ydot[:nq], ydot[nq:nr]
         yb = y[nr:].reshape(nb, nbl)
         ydb = ydot[nr:].reshape(nb, nbl)
         v, w = self.rigid.root_motion(q, u, t)
         g = self.rigid.gravity_in_root(q, t) if self.gravity else None
-        bj = self._beam_jac
-        C = bj.n_colours
-        rep = lambda a: None if a is None else np.tile(a, (C, 1))       # (C*nb, 3)
-        seeds = np.repeat(bj.seeds, nb, axis=0) * (1j * h)              # (C*nb, nbl)
-        Yb, Ydb = np.tile(yb, (C, 1)), np.tile(ydb, (C, 1))
-        comp_y = self.beam.residual(Ydb, Yb + seeds, rep(v), rep(w), rep(g)).imag / h
-        comp_d = self.beam.residual(Ydb + seeds, Yb, rep(v), rep(w), rep(g)).imag / h
         rows_y, cols_y, vals_y = [], [], []
         rows_d, cols_d, vals_d = [], [], []
-        br, bc, bcol = bj._rows, bj._cols, bj._col_colour
-        for k in range(nb):
-            off = self.layout.blade_offset(k)
-            rows_y.append(br + off), cols_y.append(bc + off)
-            vals_y.append(comp_y.reshape(C, nb, nbl)[bcol, k, br])
-            rows_d.append(br + off), cols_d.append(bc + off)
-            vals_d.append(comp_d.reshape(C, nb, nbl)[bcol, k, br])
+        self._blade_block_jacobians(v, w, g, yb, ydb, (rows_y, cols_y, vals_y),
+                                    (rows_d, cols_d, vals_d))
         if nr:          # the rigid columns and the rigid rows (they vary with the azimuth)
             c = self.coupling_jacobians(ydot, y, t)
             rc, kc = c["rigid"], c["root_loads"]
@@ -338,6 +309,34 @@ class TurbineModel:
         Jd = sp.csc_matrix((np.concatenate(vals_d), (np.concatenate(rows_d), np.concatenate(cols_d))), shape=shape)
         return Jy, Jd
 
+    @staticmethod
+    def _block_jacobians(jac, fun, yy, yyd, offsets, Jy_parts, Jd_parts):
+        """Block-diagonal Jacobian entries of ``len(offsets)`` identical beams (the beam k's
+        unknowns and rows start at ``offsets[k]``; ``yy``, ``yyd`` (nblk, n)) by coloured
+        complex steps, all colours of all beams in one call of ``fun(Yd, Y, C) -> (C*nblk,
+        n)``; appends (rows, cols, values) of dR/dy to ``Jy_parts``, of dR/dydot to
+        ``Jd_parts``."""
+        h = STEP
+        nblk, n = yy.shape
+        C = jac.n_colours
+        seeds = np.repeat(jac.seeds, nblk, axis=0) * (1j * h)          # (C*nblk, n)
+        Y, Yd = np.tile(yy, (C, 1)), np.tile(yyd, (C, 1))
+        for Yp, Ydp, (rr, cc, vv) in ((Y + seeds, Yd, Jy_parts), (Y, Yd + seeds, Jd_parts)):
+            comp = fun(Ydp, Yp, C).imag.reshape(C, nblk, n) / h
+            for k in range(nblk):
+                rr.append(jac._rows + offsets[k]), cc.append(jac._cols + offsets[k])
+                vv.append(comp[jac._col_colour, k, jac._rows])
+
+    def _blade_block_jacobians(self, v, w, g, yb, ydb, Jy_parts, Jd_parts):
+        """Blade rows w.r.t. their own unknowns at the root motion (v, w) and gravity g
+        (Nb, 3) (see _block_jacobians)."""
+        rep = lambda a, C: None if a is None else np.tile(a, (C, 1))    # (C*nb, 3)
+        self._block_jacobians(
+            self._beam_jac, lambda Yd, Y, C: self.beam.residual(Yd, Y, rep(v, C), rep(w, C),
+                                                                 rep(g, C)),
+            yb, ydb, [self.layout.blade_offset(k) for k in range(self.n_blades)],
+            Jy_parts, Jd_parts)
+
     def _jacobians_tower(self, ydot, y, t):
         """Structured Jacobians with a flexible tower: blade rows w.r.t. blade unknowns (one
         batched call), blade rows w.r.t. the rigid unknowns and the tower-top theta, V, Omega
@@ -347,7 +346,7 @@ class TurbineModel:
         unknowns and rates, the blade root loads and the tower-top state and rates."""
         h = STEP
         nq, nu, nr, nb, nbl = self.nq, self.nu, self.nq + self.nu, self.n_blades, self.beam.n
-        to, nt = self.layout.tower_offset, self.tower.n
+        to = self.layout.tower_offset
         q, u, ud = y[:nq], y[nq:nr], ydot[nq:nr]
         yb = y[nr:to].reshape(nb, nbl)
         ydb = ydot[nr:to].reshape(nb, nbl)
@@ -357,27 +356,13 @@ class TurbineModel:
         g = self.rigid.gravity_in_root(q, t, tw) if self.gravity else None
         rows_y, cols_y, vals_y = [], [], []
         rows_d, cols_d, vals_d = [], [], []
-
-        def batched(jac, fun, yy, yyd, off, nblk, n):
-            """Block-diagonal part of nblk identical beams (fun(Yd, Y, C) -> (C*nblk, n))."""
-            C = jac.n_colours
-            seeds = np.repeat(jac.seeds, nblk, axis=0) * (1j * h)
-            Y, Yd = np.tile(yy, (C, 1)), np.tile(yyd, (C, 1))
-            for Yp, Ydp, rr, cc, vv in ((Y + seeds, Yd, rows_y, cols_y, vals_y),
-                                        (Y, Yd + seeds, rows_d, cols_d, vals_d)):
-                comp = fun(Ydp, Yp, C).imag.reshape(C, nblk, n) / h
-                for k in range(nblk):
-                    rr.append(jac._rows + off[k]), cc.append(jac._cols + off[k])
-                    vv.append(comp[jac._col_colour, k, jac._rows])
-
-        rep = lambda a, C: None if a is None else np.tile(a, (C, 1))
-        batched(self._beam_jac,
-                lambda Yd, Y, C: self.beam.residual(Yd, Y, rep(v, C), rep(w, C), rep(g, C)),
-                yb, ydb, [self.layout.blade_offset(k) for k in range(nb)], nb, nbl)
+        Jy_parts, Jd_parts = (rows_y, cols_y, vals_y), (rows_d, cols_d, vals_d)
+        self._blade_block_jacobians(v, w, g, yb, ydb, Jy_parts, Jd_parts)
         gf = self.rigid.generalized_forces(q, u, ud, t, yb[:, 0:3], yb[:, 3:6], tw)
         tip = gf[nu:]
-        batched(self._tower_jac, lambda Yd, Y, C: self._tower_residual(Yd, Y, tip, C),
-                yt[None], ydt[None], [to], 1, nt)
+        self._block_jacobians(self._tower_jac,
+                              lambda Yd, Y, C: self._tower_residual(Yd, Y, tip, C),
+                              yt[None], ydt[None], [to], Jy_parts, Jd_parts)
 
         # blade rows w.r.t. rigid q, u and the tower-top theta, V, Omega (root motion, gravity)
         tip_cols = np.concatenate([self._tip_theta, self._tip_V, self._tip_Om])
@@ -404,17 +389,14 @@ class TurbineModel:
 
         def rigid_rows(yy, yyd):
             Fb = yy[nr:to].reshape(nb, nbl)
-            twx = np.stack([yy[self._tip_theta], yy[self._tip_V], yy[self._tip_Om],
-                            yyd[self._tip_V], yyd[self._tip_Om]])
+            twx = self.tower_top(yyd, yy)
             rk = np.atleast_1d(self.rigid.kinematics(yy[:nq], yyd[:nq], yy[nq:nr], t))
             return np.concatenate([rk, self.rigid.generalized_forces(
                 yy[:nq], yy[nq:nr], yyd[nq:nr], t, Fb[:, 0:3], Fb[:, 3:6], twx)])
 
-        root_cols = np.concatenate([self.layout.blade_offset(k) + np.arange(6)
-                                    for k in range(nb)]).astype(int)
         for cols, rr_, cc_, vv_, wrt_rate in (
-                (np.concatenate([np.arange(nr), root_cols, tip_cols]), rows_y, cols_y, vals_y,
-                 False),
+                (np.concatenate([np.arange(nr), self._root_cols, tip_cols]), rows_y, cols_y,
+                 vals_y, False),
                 (np.concatenate([np.arange(nr), self._tip_V, self._tip_Om]), rows_d, cols_d,
                  vals_d, True)):
             for col in cols:
@@ -428,8 +410,6 @@ class TurbineModel:
                                                      np.concatenate(cols_y))), shape=shape)
         Jd = sp.csc_matrix((np.concatenate(vals_d), (np.concatenate(rows_d),
                                                      np.concatenate(cols_d))), shape=shape)
-        Jy.sum_duplicates()
-        Jd.sum_duplicates()
         return Jy, Jd
 
     def coupling_jacobians(self, ydot, y, t):
@@ -454,7 +434,7 @@ class TurbineModel:
         h = STEP
         nq, nu, nr, nb, nbl = self.nq, self.nu, self.nq + self.nu, self.n_blades, self.beam.n
         rc = np.arange(nr)
-        kc = np.concatenate([self.layout.blade_offset(k) + np.arange(6) for k in range(nb)])
+        kc = self._root_cols
         yb, ydb = y[nr:].reshape(nb, nbl), ydot[nr:].reshape(nb, nbl)
         # blade rows: perturb the rigid unknowns through the root motion and gravity
         x = np.tile(y[:nr].astype(complex), (M * nr, 1)) + 1j * h * np.tile(np.eye(nr), (M, 1))
@@ -539,9 +519,11 @@ class TurbineModel:
         """
         z = np.zeros(self.n)
         fun = lambda y: self.residual(z, y, 0.0)
-        jac = lambda y: self.jacobians(z, y, 0.0)[0]
         y0 = self.initial_guess()
-        ignorable = self.ignorable_columns(jac(y0))
+        J0 = self.jacobians(z, y0, 0.0)[0]
+        # Newton's first step is at y0 again: reuse J0 there
+        jac = lambda y: J0 if np.array_equal(y, y0) else self.jacobians(z, y, 0.0)[0]
+        ignorable = self.ignorable_columns(J0)
         y, _ = newton(fun, jac, y0, tol=tol, what="turbine steady state", fixed=ignorable)
         if not self.is_time_invariant_at(y):
             raise ValueError("steady state: this configuration (gravity, tilt or an asymmetric "
