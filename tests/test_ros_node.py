@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from paper_tables import TABLE2, TEETER_REAL_PER_REV
 from ros_support import require_ros
 
 HERE = Path(__file__).resolve().parent
@@ -56,8 +57,7 @@ def _require_ros():
 
 ros = pytest.mark.ros
 _counter = itertools.count()
-TABLE2_N4 = [2.4347, 7.3210, 15.5465, 28.3486, 2.2896, 2.2915, 6.5738, 6.5742,
-             4.7523, 4.9927, 33.5731, 34.1087]
+TABLE2_N4 = [row[2] for row in TABLE2.values()]        # the paper's Table 2, N = 4
 
 
 def domain_id() -> int:
@@ -446,7 +446,7 @@ def test_service_returns_table2_and_cli_json(spawn, tmp_path):
     for f in TABLE2_N4:
         assert np.min(np.abs(freqs - f)) / f < 2e-3, f"Table 2 value {f} not among {freqs}"
     reals = np.array([abs(m.real_per_rev) for m in resp.modes])
-    assert np.min(np.abs(reals - 0.045299)) < 1e-3          # the teeter pair's real part
+    assert np.min(np.abs(reals - TEETER_REAL_PER_REV)) < 1e-3   # the teeter pair's real part
     assert any(len(m.shape.displacement_real) == 2 * 5 for m in resp.modes)
     # `hawt call modes --json`: the same modes (the node caches the result)
     out = run_cli(["call", "modes", "--json"], node.domain, tmp_path, timeout=60)

@@ -19,6 +19,7 @@ import time
 from pathlib import Path
 
 import pytest
+from paper_tables import TABLE2
 from ros_support import require_ros
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -38,8 +39,9 @@ except Exception as exc:  # noqa: BLE001
 
 pytestmark = pytest.mark.ros
 
-#: The paper's Table 2 (N = 4): 1st antisymmetric flap, per-rev.
-TABLE2_ANTISYM_FLAP = 7.32
+#: The paper's Table 2 (N = 4): 1st antisymmetric flap, per-rev, 7.3210 rounded to 7.32 as
+#: this test has always checked it (0.2 % about 7.32; about 7.3210 the window would move).
+TABLE2_ANTISYM_FLAP = round(TABLE2[("flap", "antisymmetric", 1)][2], 2)
 BUDGET = 88.0           # s, the whole test
 
 
