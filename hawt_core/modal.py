@@ -35,7 +35,7 @@ import scipy.linalg as sl
 from scipy.optimize import linear_sum_assignment
 
 from .assembly import TurbineModel
-from .blade_modes import FAMILIES, classify_energy, deflate_infinite, equilibrate
+from .blade_modes import FAMILIES, check_elements, classify_energy, deflate_infinite, equilibrate
 from .floquet import LinearPeriodicDAE, _dominant_harmonic, floquet_analysis
 from .model import Turbine
 from .periodic import periodic_steady_state
@@ -47,6 +47,8 @@ STEPS_PER_CYCLE = {"radau": 8.0, "paper": 12.0}
 MAX_STEPS = 1_000_000
 #: Most samples of the periodic eigenvectors per period (memory: samples x rows x modes).
 MAX_SAMPLES = 512
+#: Most finite elements per blade accepted by :func:`validate_request`.
+MAX_ELEMENTS = 512
 
 
 class Cancelled(RuntimeError):
@@ -163,10 +165,11 @@ def format_table(header: str, modes, footer=()) -> str:
 def validate_request(elements=None, rotor_speed=None, steps=None, method=None):
     """Check analysis overrides; raises ValueError naming the field, value and what's allowed."""
     if elements is not None:
-        if isinstance(elements, bool) or not float(elements).is_integer() or int(elements) < 1:
+        if isinstance(elements, bool):      # check_elements would take True for 1
             raise ValueError(f"elements: {elements!r} is not allowed; need an integer >= 1")
-        if int(elements) > 512:
-            raise ValueError(f"elements: {elements!r} is not allowed; need at most 512 per blade")
+        if check_elements(elements) > MAX_ELEMENTS:
+            raise ValueError(f"elements: {elements!r} is not allowed; need at most "
+                             f"{MAX_ELEMENTS} per blade")
     if rotor_speed is not None:
         r = float(rotor_speed)
         if not np.isfinite(r) or r <= 0:

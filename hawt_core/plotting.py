@@ -11,6 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .modal import _ordinal
+
 
 def _pyplot():
     import matplotlib
@@ -65,10 +67,6 @@ MODE_INSTANTS = 4
 MODE_AMPLITUDE = 0.12
 #: Largest drawn twist in the rod illustration [rad].
 TWIST_AMPLITUDE = math.radians(60.0)
-
-
-def _ordinal(k: int) -> str:
-    return {1: "1st", 2: "2nd", 3: "3rd"}.get(k, f"{k}th")
 
 
 def mode_label(mode) -> str:
