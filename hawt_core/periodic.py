@@ -47,21 +47,28 @@ class PeriodicSteadyState:
     harmonics: int = 0
     interpolation_error: float = 0.0
 
+    def _fourier(self):
+        """(c, k): Fourier coefficients of ``states`` and their harmonics, computed on first
+        use (again if ``states`` is replaced; do not modify it in place)."""
+        cached = self.__dict__.get("_fourier_cache")
+        if cached is None or cached[0] is not self.states:
+            M = len(self.times)
+            cached = (self.states, np.fft.fft(self.states, axis=0) / M,
+                      np.fft.fftfreq(M, d=1.0 / M))
+            self.__dict__["_fourier_cache"] = cached
+        return cached[1], cached[2]
+
     def at(self, t: float) -> np.ndarray:
         if self.constant:
             return self.states[0].copy()
-        M = len(self.times)
-        c = np.fft.fft(self.states, axis=0) / M
-        k = np.fft.fftfreq(M, d=1.0 / M)
+        c, k = self._fourier()
         ph = np.exp(2j * np.pi * k * (t % self.period) / self.period)
         return np.real(ph @ c)
 
     def rate_at(self, t: float) -> np.ndarray:
         if self.constant:
             return np.zeros(self.states.shape[1])
-        M = len(self.times)
-        c = np.fft.fft(self.states, axis=0) / M
-        k = np.fft.fftfreq(M, d=1.0 / M)
+        c, k = self._fourier()
         w = 2 * np.pi / self.period
         ph = 1j * k * w * np.exp(2j * np.pi * k * (t % self.period) / self.period)
         return np.real(ph @ c)
