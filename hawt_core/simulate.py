@@ -50,7 +50,7 @@ import scipy.sparse.linalg as spl
 
 from .fem.beam import BLOCK_SIZE, ROOT_SIZE
 from .jacobian import STEP, ColouredJacobian
-from .window import WindowFailure, WindowSolver
+from .window import WindowFailure, WindowSolver, midpoint_arguments, step_matrix
 
 __all__ = ["Simulator", "SimulationError", "NAMED", "consistent_state", "add_cli",
            "cmd_simulate", "parse_perturb"]
@@ -375,7 +375,6 @@ class Simulator:
         self._colour = None
         if hasattr(model, "sparsity"):
             self._colour = ColouredJacobian(model.sparsity())
-        self._col_factor = np.where(self.diff, 0.5, 1.0)
         self._di = np.flatnonzero(self.diff)
         self._ai = np.flatnonzero(self.alg)
         #: running scaled errors of the degree-0/1/2 predictors (differential, algebraic)
@@ -605,13 +604,7 @@ class Simulator:
     def _G(self, x, yn, tm, h):
         """Midpoint residual of the step unknowns x = [y_{n+1} | z_{n+1/2}] (n,), or of K
         sets of them (K, n) (same step: one batched residual evaluation)."""
-        d = self._di
-        xd = x[..., d]
-        ydot = np.zeros(x.shape, dtype=x.dtype)
-        ydot[..., d] = (xd - yn) / h
-        ym = x.copy()
-        ym[..., d] = 0.5 * (xd + yn)
-        return self.model.residual(ydot, ym, tm)
+        return self.model.residual(*midpoint_arguments(x, yn, self._di, h), tm)
 
     def _refresh_jacobian(self, x, yn, tm, h):
         """Exact Newton matrix dG/dx at x (= dR/dydot / h + dR/dy / 2 on differential
@@ -621,13 +614,9 @@ class Simulator:
         w0 = time.perf_counter()
         m = self.model
         if hasattr(m, "jacobians"):
-            d = self._di
-            ydot = np.zeros(self.n)
-            ydot[d] = (x[d] - yn) / h
-            ym = x.copy()
-            ym[d] = 0.5 * (x[d] + yn)
-            Jy, Jd = (sp.csc_matrix(J) for J in m.jacobians(ydot, ym, tm))
-            J = Jd @ sp.diags(np.where(self.diff, 1.0 / h, 0.0)) + Jy @ sp.diags(self._col_factor)
+            Jy, Jd = (sp.csc_matrix(J) for J in m.jacobians(*midpoint_arguments(x, yn, self._di,
+                                                                                 h), tm))
+            J = step_matrix(Jy, Jd, self.diff, h)
         else:
             J = self._colour(lambda xx: self._G(xx, yn, tm, h), x)
         self.jacobian_evaluations += 1

@@ -41,6 +41,32 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.linalg as sla
+import scipy.sparse as sp
+
+
+def midpoint_arguments(x, prev, di, h):
+    """(ydot, y) arguments of the residual at the midpoint of implicit-midpoint steps of size
+    h: ``x`` (n,) or (K, n) the step unknowns (grid values at the steps' ends at the
+    differential indices ``di``, algebraic midpoint values elsewhere), ``prev`` the
+    differential grid values at the steps' starts ((len(di),) or (K, len(di)))."""
+    xd = x[..., di]
+    ydot = np.zeros(x.shape, dtype=x.dtype)
+    ydot[..., di] = (xd - prev) / h
+    ym = x.copy()
+    ym[..., di] = 0.5 * (xd + prev)
+    return ydot, ym
+
+
+def step_matrix(Jy, Jd, diff, h):
+    """Newton matrix dG/dx of a step of size h from the residual's Jacobians at the midpoint
+    arguments: ``dR/dydot / h + dR/dy / 2`` on the differential columns (``diff`` (n,)
+    bool), ``dR/dy`` on the algebraic ones. ``Jy``, ``Jd``: dense arrays or sparse
+    matrices (the result is of the same kind)."""
+    cy = np.where(diff, 0.5, 1.0)
+    cd = np.where(diff, 1.0 / h, 0.0)
+    if sp.issparse(Jy):
+        return Jd @ sp.diags(cd) + Jy @ sp.diags(cy)
+    return Jd * cd[None, :] + Jy * cy[None, :]
 
 
 class WindowFailure(RuntimeError):
@@ -73,8 +99,9 @@ class WindowSolver:
         self.model = model
         self.n = int(model.n)
         self.sc = np.asarray(scale, float)
-        self.di = np.flatnonzero(diff)
-        self.ai = np.flatnonzero(~np.asarray(diff, bool))
+        self.diff = np.asarray(diff, bool)
+        self.di = np.flatnonzero(self.diff)
+        self.ai = np.flatnonzero(~self.diff)
         self.tol = float(tol)
         self.max_iter = int(max_iter)
         self.nr = int(getattr(model, "nq", 0)) + int(getattr(model, "nu", 0))
@@ -109,12 +136,9 @@ class WindowSolver:
     # ------------------------------------------------------------------ matrices
     def _step_matrices(self, x, yn, tm, h):
         """Exact dG/dx_k (A) and dG/dx_{k-1} on the differential columns (B), dense."""
-        ydot, ym = self._rates_and_midpoint(x[None], yn, h)
-        Jy, Jd = self.model.jacobians(ydot[0], ym[0], tm)
+        Jy, Jd = self.model.jacobians(*midpoint_arguments(x, yn, self.di, h), tm)
         Jy, Jd = Jy.toarray(), Jd.toarray()
-        d = np.zeros(self.n, bool)
-        d[self.di] = True
-        A = Jy * np.where(d, 0.5, 1.0)[None, :] + Jd * np.where(d, 1.0 / h, 0.0)[None, :]
+        A = step_matrix(Jy, Jd, self.diff, h)
         B = (0.5 * Jy - Jd / h)[:, self.di]
         return A, B
 
@@ -154,11 +178,11 @@ class WindowSolver:
         if nxt is not None and nxt[0][1] == h and abs(nxt[0][0] - tm) <= 1e-6 * h:
             c = nxt[1]
         else:
-            ydot, ym = self._rates_and_midpoint(x[None], yn, h)
+            ydot, ym = midpoint_arguments(x, yn, self.di, h)
             if t_next is None:
-                c = self.model.coupling_jacobians(ydot[0], ym[0], tm)
+                c = self.model.coupling_jacobians(ydot, ym, tm)
             else:
-                cc = self.model.coupling_jacobians(ydot[0], ym[0], np.array([tm, t_next]))
+                cc = self.model.coupling_jacobians(ydot, ym, np.array([tm, t_next]))
                 c = {k: (v[0] if k not in ("rigid", "root_loads") else v) for k, v in cc.items()}
                 self._next_coupling = ((t_next, h), {k: (v[1] if k not in ("rigid", "root_loads")
                                                          else v) for k, v in cc.items()})
@@ -195,16 +219,13 @@ class WindowSolver:
 
     # ------------------------------------------------------------------ iteration
     def _rates_and_midpoint(self, X, yn, h):
-        """(ydot, y) arguments of the residual for the K step unknowns X (K, n)."""
+        """(ydot, y) arguments of the residual for the K consecutive step unknowns X (K, n)
+        from the grid values yn."""
         di = self.di
         prev = np.empty((X.shape[0], len(di)), dtype=X.dtype)
         prev[0] = yn
         prev[1:] = X[:-1, di]
-        ydot = np.zeros(X.shape, dtype=X.dtype)
-        ydot[:, di] = (X[:, di] - prev) / h
-        ym = X.copy()
-        ym[:, di] = 0.5 * (X[:, di] + prev)
-        return ydot, ym
+        return midpoint_arguments(X, prev, di, h)
 
     def residuals(self, X, yn, t0, h):
         """Residual rows (K, n) of the K steps starting at t0 from the grid values yn."""

@@ -423,7 +423,7 @@ def _full_newton_step(model, sim, yn, tn, h, x):
         ym[d] = 0.5 * (x[d] + yn)
         Jy, Jd = model.jacobians(ydot, ym, tn + h / 2)
         J = (Jd.toarray() * np.where(sim.diff, 1 / h, 0.0)[None, :]
-             + Jy.toarray() * sim._col_factor[None, :])
+             + Jy.toarray() * np.where(sim.diff, 0.5, 1.0)[None, :])
         x = x - np.linalg.solve(J, sim._G(x, yn, tn + h / 2, h))
     return x
 
