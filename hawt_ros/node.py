@@ -291,15 +291,29 @@ class HawtNode(Node):
             self.recorder.add_topic(pub.topic_name, type_name_of(pub.msg_type), qos=STATE_QOS)
         self.record_path = str(p)
 
-    def _stop_recording(self) -> None:
-        rec, self.recorder = self.recorder, None
-        if rec is not None:
+    def _stop_recording(self, failure: Optional[str] = None) -> None:
+        """Drop the recorder and clear ``record_path`` and ``settings.record`` (so setting
+        ``record`` again starts a new recording). Normally finalize the file and log it; with
+        ``failure`` (a write failed) log that and close the file quietly."""
+        rec, path = self.recorder, self.record_path
+        self.recorder = None
+        self.record_path = ""
+        if self.settings.record:
+            self.settings = self.settings.replace(record="")
+        if rec is None:
+            return
+        if failure is not None:
+            self.get_logger().error(f"recording to {path} failed ({failure}); recording stopped")
             try:
                 rec.close()
-                self.get_logger().info(f"recording finalized: {self.record_path} "
-                                       f"({rec.message_count} messages)")
-            except Exception as exc:  # noqa: BLE001
-                self.get_logger().error(f"closing the recording {self.record_path} failed: {exc}")
+            except Exception:  # noqa: BLE001
+                pass
+            return
+        try:
+            rec.close()
+            self.get_logger().info(f"recording finalized: {path} ({rec.message_count} messages)")
+        except Exception as exc:  # noqa: BLE001
+            self.get_logger().error(f"closing the recording {path} failed: {exc}")
 
     def _emit(self, pub, msg, stamp_ns: int) -> None:
         """Publish ``msg``; when recording, serialize once, publish those bytes and record them."""
@@ -315,13 +329,7 @@ class HawtNode(Node):
         try:
             rec.write_serialized(pub.topic_name, type_name, data, log_time=stamp_ns)
         except Exception as exc:  # noqa: BLE001 - recording problems never stop the node
-            self.get_logger().error(f"recording to {self.record_path} failed ({exc}); "
-                                    "recording stopped")
-            self.recorder = None
-            try:
-                rec.close()
-            except Exception:  # noqa: BLE001
-                pass
+            self._stop_recording(failure=str(exc))
 
     def _fail(self, reason: str) -> None:
         self._failed = reason
@@ -525,8 +533,8 @@ class HawtNode(Node):
         if not changes:
             return SetParametersResult(successful=True)
         with self._lock:
-            if "record" in changes and changes["record"] != self.record_path:
-                new = changes["record"]
+            new = changes.get("record")
+            if new is not None and (str(Path(new).expanduser()) if new else "") != self.record_path:
                 if new:
                     if self.recorder is not None:
                         return SetParametersResult(
@@ -539,7 +547,6 @@ class HawtNode(Node):
                         return SetParametersResult(successful=False, reason=f"record: {new!r}: {exc}")
                 else:
                     self._stop_recording()
-                    self.record_path = ""
             self.settings = self.settings.replace(**changes)
             if "publish_rate" in changes or "real_time_factor" in changes:
                 self._check_step_rate()
