@@ -228,18 +228,22 @@ _register_ros_commands()
 
 
 # ---------------------------------------------------------------------------- simulate
-# `hawt simulate`: defined in hawt_core.simulate (cmd_simulate, add_arguments).
-def _register_simulate():
-    from .simulate import add_arguments, cmd_simulate
-    run = command("simulate", help="nonlinear time simulation",
-                  description="Nonlinear time simulation (implicit midpoint, finite elements "
-                              "in time) from the steady state plus perturbations; prints a "
-                              "summary (JSON with --json), writes time histories with "
-                              "--output.")(cmd_simulate)
-    run.arguments(add_arguments)
+# `hawt simulate`: defined in hawt_core.simulate (cmd_simulate, add_arguments), imported only
+# when the command runs or its arguments are added (build_parser), so that importing this
+# module stays cheap (hawt_core.simulate pulls in numpy and scipy: ~0.25 s).
+@command("simulate", help="nonlinear time simulation",
+         description="Nonlinear time simulation (implicit midpoint, finite elements in time) "
+                     "from the steady state plus perturbations; prints a summary (JSON with "
+                     "--json), writes time histories with --output.")
+def cmd_simulate(args) -> int:
+    from .simulate import cmd_simulate as run
+    return run(args)
 
 
-_register_simulate()
+@cmd_simulate.arguments
+def _simulate_args(p):
+    from .simulate import add_arguments
+    add_arguments(p)
 
 
 # ---------------------------------------------------------------------------- campbell
