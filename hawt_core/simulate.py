@@ -52,8 +52,8 @@ from .fem.beam import BLOCK_SIZE, ROOT_SIZE
 from .jacobian import STEP, ColouredJacobian
 from .window import WindowFailure, WindowSolver, midpoint_arguments, step_matrix
 
-__all__ = ["Simulator", "SimulationError", "NAMED", "consistent_state", "add_cli",
-           "cmd_simulate", "parse_perturb"]
+__all__ = ["Simulator", "SimulationError", "NAMED", "consistent_state", "cmd_simulate",
+           "parse_perturb"]
 
 #: Scalar outputs of ``Simulator.named()`` (and the first CSV columns).
 NAMED = ("time", "azimuth", "yaw", "yaw_rate", "teeter", "teeter_rate")
@@ -105,7 +105,6 @@ class _BladeIndex:
         self.theta = bl.theta[1:].ravel()
         self.root_force = bl.root_force
         self.root_moment = bl.root_moment
-        self.layout = bl
 
 
 # ============================================================================ initial state
@@ -140,7 +139,7 @@ def _rigid_speed_map(model, q, t):
     return np.stack([model.rigid.qdot(q, e, t) for e in np.eye(nu)], -1)
 
 
-def _lin_solve(model, fun, x0, cols_rows_jac, what, iters=6):
+def _lin_solve(fun, x0, cols_rows_jac, what, iters=6):
     """Newton on a square sub-system: ``fun(x) -> residual rows``, ``cols_rows_jac(x)`` the
     sparse square Jacobian. The sub-systems used here are linear or nearly so."""
     x = x0.copy()
@@ -194,7 +193,7 @@ def consistent_state(model, y, ydot, t, theta_rate=None):
             yy[cc] = x
             return sp.csr_matrix(model.jacobians(ydot, yy, t)[0])[rows][:, cc]
 
-        return _lin_solve(model, f, y[cc], j, what)
+        return _lin_solve(f, y[cc], j, what)
 
     # 1. positions
     y[pos_cols] = solve_subset(pos_cols, sd, "the position constraints")
@@ -337,7 +336,6 @@ class Simulator:
         mode_amplitude = _check_number("mode_amplitude", mode_amplitude)
 
         # ---------------------------------------------------------------- initial state
-        self._steady = None
         if y0 is None:
             y, yd = self._steady_at(t0, harmonics)
         else:
@@ -354,7 +352,6 @@ class Simulator:
         self.t0 = t0
         self.t = t0
         self.y = y                      # full state at t (algebraic part: see _alg_at)
-        self.yd0 = yd
         self.steps = 0
         self.newton_iterations = 0
         self.factorizations = 0
@@ -367,10 +364,8 @@ class Simulator:
         self._mid = []                   # (t_mid, z)
         self._z_init = y[self.alg].copy()
         self._scale = self._variable_scales(y)
-        self._eta = 1.0
         self._lu = None
         self._lu_h = None
-        self._Jy = self._Jd = None
         self._jac_fresh = False
         self._colour = None
         if hasattr(model, "sparsity"):
@@ -411,7 +406,6 @@ class Simulator:
         except ValueError:
             from .periodic import periodic_steady_state
             ss = periodic_steady_state(m, harmonics=harmonics)
-            self._steady = ss
             return ss.at(t), ss.rate_at(t)
 
     def _perturbed(self, y, yd, t, perturb, mode, amplitude, signs):
@@ -419,14 +413,12 @@ class Simulator:
         nq, nr = m.nq, m.nq + m.nu
         y = y.copy()
         yd = yd.copy()
-        theta_rate = None
         if mode is not None and amplitude != 0:
             d = _mode_delta(m, mode, amplitude, signs)
             y[:nr] += d[:nr]
             _, _, cols = _blade_rows(m)
             y[cols["theta"]] += d[cols["theta"]]
             y[cols["u"]] += d[cols["u"]]          # initial guess; re-solved below
-        q = y[:nq]
         for name in ("yaw", "teeter"):
             if name in perturb:
                 y[m.layout[name]] += float(perturb[name])
@@ -440,8 +432,8 @@ class Simulator:
                 if r in perturb:
                     qd[m.layout[c]] += float(perturb[r])
             y[nq:nr] = np.linalg.lstsq(A, qd, rcond=None)[0]
-        theta_rate = yd[_blade_rows(m)[2]["theta"]]  # keep the base relative rates
-        return consistent_state(m, y, yd, t, theta_rate=theta_rate)
+        # (the blades' rotation rates: the base state's, those of yd)
+        return consistent_state(m, y, yd, t)
 
     def _variable_scales(self, y):
         """Characteristic magnitude of every unknown (for the Newton and error norms)."""
@@ -453,7 +445,6 @@ class Simulator:
         g = float(m.turbine.gravity.g) if m.gravity else 0.0
         Fs = mass * (omega ** 2 * R + g) + 1.0
         sc = np.ones(self.n)
-        sc[:m.nq] = 1.0
         sc[m.nq:m.nq + m.nu] = omega
         for k in range(m.n_blades):
             bl = m.layout.blade(k)
@@ -526,11 +517,7 @@ class Simulator:
         """Names of the history columns (CSV header)."""
         cols = list(NAMED)
         for k in range(len(self._blades)):
-            nodes = []
-            for i in range(1, self._N + 1):
-                nodes += [f"blade{k}_node{i}_u{c}" for c in (1, 2, 3)] + \
-                         [f"blade{k}_node{i}_theta{c}" for c in (1, 2, 3)]
-            # stored as all u then all theta; reorder names accordingly
+            # stored as all u then all theta
             us = [f"blade{k}_node{i}_u{c}" for i in range(1, self._N + 1) for c in (1, 2, 3)]
             ths = [f"blade{k}_node{i}_theta{c}" for i in range(1, self._N + 1) for c in (1, 2, 3)]
             cols += us + ths
@@ -754,7 +741,6 @@ class Simulator:
         J = sp.csc_matrix(sp.diags(self._row) @ J)
         self._J0 = J if self._rc is not None else None
         self._wb = None
-        self._base_age = 0
         try:
             self._lu = spl.splu(J)
         except RuntimeError as exc:
@@ -956,14 +942,14 @@ class Simulator:
             if x is not None:
                 if self.adaptive:
                     err = self._error(x)
-                    if err > 1.0 and h > 1e-6 * self._h_nominal():
+                    if err > 1.0 and h > 1e-6 * self.h:
                         self.rejected_steps += 1
                         h = h * max(0.2, 0.9 * err ** (-1 / 3))
                         continue
                     fac = min(2.0, max(0.2, 0.9 * max(err, 1e-10) ** (-1 / 3)))
                     self._h_next = h * fac if (fac < 0.9 or fac > 1.3) else h
                 break
-            if self.adaptive and h > 1e-6 * self._h_nominal():
+            if self.adaptive and h > 1e-6 * self.h:
                 self.rejected_steps += 1
                 h *= 0.25
                 continue
@@ -1085,8 +1071,7 @@ class Simulator:
             try:
                 X = win.solve(yn, z0, self.t, h, K)
                 break
-            except WindowFailure as exc:
-                self._window_error = str(exc)
+            except WindowFailure:
                 if win.refreshes > before and attempt == 0:
                     break               # failed with a fresh base: single steps instead
         self.jacobian_evaluations += win.refreshes - before
@@ -1109,9 +1094,6 @@ class Simulator:
         Y[:, self._ai] = Xa + (Xa - Za[:-1]) * (0.5 * h / span)[:, None]
         Xs = X / self._scale
         self._buffer = [(h, Xd[k], Xa[k], Xs[k], Y[k]) for k in range(K)]
-
-    def _h_nominal(self):
-        return self.h
 
     def _error(self, x):
         """Local error estimate (Milne): the quadratic extrapolation of the grid values (the
@@ -1141,7 +1123,6 @@ class Simulator:
         duration = _check_number("duration", duration, minimum=0.0)
         t_end = self.t + duration
         last = time.perf_counter()
-        h_nom = self.h
         w_start = self.wall_seconds
         while self.t < t_end - 1e-9 * max(1.0, abs(t_end)):
             # one decision for full and shortened steps: a step that overshoots t_end by
@@ -1166,7 +1147,6 @@ class Simulator:
         self._steps_wanted = None
         if progress is not None:
             progress(1.0, f"t = {self.t:.3f} s done")
-        del h_nom
         return self.summary()
 
 
@@ -1253,19 +1233,3 @@ def add_arguments(p):
                    help="show the status line even when stderr is not a terminal")
     p.add_argument("--quiet", "-q", action="store_true", help="no status line")
 
-
-def add_cli(subparsers=None):
-    """Register ``hawt simulate`` in hawt_core.cli's registry (or on ``subparsers``)."""
-    desc = ("Nonlinear time simulation (implicit midpoint / finite elements in time) from the "
-            "steady state plus perturbations; prints a summary (JSON with --json) and writes "
-            "time histories with --output.")
-    if subparsers is not None:
-        p = subparsers.add_parser("simulate", help="nonlinear time simulation", description=desc)
-        add_arguments(p)
-        p.set_defaults(run=cmd_simulate)
-        return p
-    from . import cli
-    run = cli.command("simulate", help="nonlinear time simulation", description=desc)(
-        cmd_simulate)
-    run.arguments(add_arguments)
-    return run

@@ -297,7 +297,6 @@ class WindowSolver:
                               f"(last increment {dn:.3e}, tolerance {self.tol:.1e})")
         self._adapt(it + 1, theta)
         self.windows += 1
-        self.last_iterations = it + 1
         return X
 
     def _first_theta(self, th):
