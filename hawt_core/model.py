@@ -19,7 +19,7 @@ frame b (reference line = the elastic/reference axis).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Optional
 
 import numpy as np
@@ -196,9 +196,7 @@ class Turbine:
     gravity: Gravity = field(default_factory=Gravity)
 
     def with_rotor_speed(self, speed: float) -> "Turbine":
-        from dataclasses import replace
         return replace(self, rotor=replace(self.rotor, speed=float(speed)))
 
     def with_elements(self, n: int) -> "Turbine":
-        from dataclasses import replace
         return replace(self, blade=replace(self.blade, elements=int(n)))
