@@ -135,13 +135,14 @@ _NACELLE = {"yaw_inertia": True, "yaw_stiffness": False, "yaw_damping": False,
 _BEAM = {"length": True, "elements": True, "sections": True}
 _TOWER = dict(_BEAM, rigid=False)
 _GRAVITY = {"enabled": True, "g": False}
-#: Per-station scalar properties: name -> (required without a 6x6 matrix, rule).
+#: Per-station scalar properties: name -> value rule (a key of _RULES).
 _SCALAR_PROPS = {
     "mass": "> 0", "i1": "> 0", "i2": "> 0", "i3": "> 0",
     "gj": "> 0", "ei2": "> 0", "ei3": "> 0",
     "ea": "> 0", "ga2": "> 0", "ga3": "> 0", "twist": "twist",
 }
-_MASS_PROPS = ("mass", "i1", "i2", "i3")          # replaced by mass_6x6 (diagonal 0, 3, 4, 5)
+_MASS_PROPS = ("mass", "i1", "i2", "i3")          # replaced by mass_6x6 ...
+_MASS_DIAGONAL = (0, 3, 4, 5)                     # ... diagonal entries holding them
 _STIFF_PROPS = ("ea", "ga2", "ga3", "gj", "ei2", "ei3")  # replaced by stiffness_6x6 diagonal
 _SECTIONS = dict({"stations": True}, **{k: False for k in _SCALAR_PROPS},
                  cg_offset=False, tension_offset=False, stiffness_6x6=False, mass_6x6=False)
@@ -511,7 +512,7 @@ def _section_table(c: _Checker, value: Any, path: str) -> Optional[SectionTable]
         return None
 
     # Fill the scalar properties from the full matrices' diagonals where not given.
-    for mats, keys, diag in ((M, _MASS_PROPS, (0, 3, 4, 5)), (K, _STIFF_PROPS, range(6))):
+    for mats, keys, diag in ((M, _MASS_PROPS, _MASS_DIAGONAL), (K, _STIFF_PROPS, range(6))):
         if mats is None:
             continue
         for key, j in zip(keys, diag):
@@ -702,7 +703,7 @@ def _table_dict(t: SectionTable) -> dict:
     out = {"stations": t.stations.tolist()}
     derived = {}
     if t.mass_6x6 is not None:
-        derived.update({k: t.mass_6x6[:, j, j] for k, j in zip(_MASS_PROPS, (0, 3, 4, 5))})
+        derived.update({k: t.mass_6x6[:, j, j] for k, j in zip(_MASS_PROPS, _MASS_DIAGONAL)})
     if t.stiffness_6x6 is not None:
         for k, j in zip(_STIFF_PROPS, range(6)):
             diag = t.stiffness_6x6[:, j, j]
