@@ -80,6 +80,13 @@ def _check_number(field: str, value, minimum=None, positive=False) -> float:
     return v
 
 
+def _check_perturbation(name, value) -> float:
+    """One perturbation: ``name`` in PERTURBABLE, ``value`` a finite number."""
+    if name not in PERTURBABLE:
+        raise ValueError(f"perturb: unknown name {name!r}; allowed: {', '.join(PERTURBABLE)}")
+    return _check_number(f"perturb {name}", value)
+
+
 def parse_perturb(text: str) -> dict:
     """``"teeter=0.02,yaw_rate=0.01"`` -> dict (names checked against PERTURBABLE)."""
     out = {}
@@ -90,9 +97,7 @@ def parse_perturb(text: str) -> dict:
             raise ValueError(f"perturb: {item.strip()!r} is not allowed; need NAME=VALUE "
                              f"with NAME in {', '.join(PERTURBABLE)}")
         name, val = (s.strip() for s in item.split("=", 1))
-        if name not in PERTURBABLE:
-            raise ValueError(f"perturb: unknown name {name!r}; allowed: {', '.join(PERTURBABLE)}")
-        out[name] = _check_number(f"perturb {name}", val)
+        out[name] = _check_perturbation(name, val)
     return out
 
 
@@ -325,10 +330,7 @@ class Simulator:
 
         perturb = dict(perturb or {})
         for name, val in perturb.items():
-            if name not in PERTURBABLE:
-                raise ValueError(f"perturb: unknown name {name!r}; allowed: "
-                                 f"{', '.join(PERTURBABLE)}")
-            _check_number(f"perturb {name}", val)
+            _check_perturbation(name, val)
             base = "yaw" if name.startswith("yaw") else "teeter"
             if base not in model.layout:
                 raise ValueError(f"perturb: {name!r} is not allowed; this model has no {base} "
