@@ -19,6 +19,8 @@ from pathlib import Path
 import pytest
 import yaml
 
+from ros_support import require_ros
+
 pytestmark = pytest.mark.ros
 
 try:
@@ -31,13 +33,11 @@ try:
     from hawt_msgs.srv import ModalAnalysis
     from sensor_msgs.msg import JointState
     from visualization_msgs.msg import Marker, MarkerArray
+    _ROS_ERROR = None
 except Exception as exc:  # ImportError, or a missing shared library of the ROS wheels
-    if os.environ.get("HAWT_REQUIRE_ROS") == "1":
-        raise ImportError(
-            f"HAWT_REQUIRE_ROS=1 but ROS 2 / hawt_msgs cannot be imported ({exc}); "
-            "run scripts/bootstrap.sh and use .venv/bin/python") from exc
-    pytest.skip(f"rclpy/hawt_msgs not importable ({exc}): the ROS tests need the venv that "
-                "scripts/bootstrap.sh sets up", allow_module_level=True)
+    _ROS_ERROR = (f"{type(exc).__name__}: {exc}; the ROS tests need the venv that "
+                  "scripts/bootstrap.sh sets up")
+require_ros(_ROS_ERROR)      # skips the module, or fails it when HAWT_REQUIRE_ROS=1
 
 from hawt_ros import mcap_io  # noqa: E402
 from hawt_ros.mcap_io import BagReader, BagWriter, bag_info, format_bag_info  # noqa: E402

@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from paper_tables import TABLE2, TEETER_REAL_PER_REV
-from ros_support import require_ros
+from ros_support import child_env, domain_id, require_ros
 
 HERE = Path(__file__).resolve().parent
 FAKES = HERE / "ros_fakes.py"
@@ -60,11 +60,6 @@ _counter = itertools.count()
 TABLE2_N4 = [row[2] for row in TABLE2.values()]        # the paper's Table 2, N = 4
 
 
-def domain_id() -> int:
-    """A ROS domain of this test alone: from the pid and a counter, in 1..101."""
-    return (os.getpid() * 7 + next(_counter) * 13) % 101 + 1
-
-
 def wait_until(cond, timeout: float, step: float = 0.02, what: str = "condition"):
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
@@ -91,9 +86,7 @@ class NodeProcess:
                  env: dict = None):
         self.domain = domain
         self.log_path = tmp_path / f"node-{domain}-{next(_counter)}.log"
-        e = dict(os.environ)
-        e.update({"ROS_DOMAIN_ID": str(domain), "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST",
-                  "ROS_LOG_DIR": str(tmp_path / "roslog"), "PYTHONUNBUFFERED": "1"})
+        e = child_env(domain, tmp_path, PYTHONUNBUFFERED="1")
         e.pop("HAWT_ROS_FAKE", None)
         if fake:
             e["HAWT_ROS_FAKE"] = str(FAKES)
@@ -229,9 +222,8 @@ def first_message(node: NodeProcess, col: Collector, timeout: float = 40.0):
 
 
 def run_cli(args, domain: int, tmp_path: Path, timeout: float = 60.0, **kw):
-    env = dict(os.environ, ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST",
-               ROS_LOG_DIR=str(tmp_path / "roslog"))
-    return subprocess.run([str(HAWT_EXE), *args], env=env, capture_output=True, text=True,
+    return subprocess.run([str(HAWT_EXE), *args], env=child_env(domain, tmp_path),
+                          capture_output=True, text=True,
                           timeout=timeout, cwd=str(tmp_path), **kw)
 
 

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import pytest
 from paper_tables import TABLE2
-from ros_support import require_ros
+from ros_support import child_env, domain_id, require_ros
 
 ROOT = Path(__file__).resolve().parents[1]
 RUN_SH = ROOT / "scripts" / "run.sh"
@@ -49,10 +49,6 @@ def _require_ros():
     require_ros(_ROS_ERROR, HAWT_EXE)
 
 
-def _domain() -> int:
-    return (os.getpid() * 11 + 57) % 101 + 1
-
-
 def test_run_script_node_modes_ctrl_c(tmp_path):
     _require_ros()
     t_start = time.monotonic()
@@ -60,12 +56,10 @@ def test_run_script_node_modes_ctrl_c(tmp_path):
     def left() -> float:
         return BUDGET - (time.monotonic() - t_start)
 
-    domain = _domain()
+    domain = domain_id()
     runs = tmp_path / "runs"
-    env = dict(os.environ)
-    env.update({"ROS_DOMAIN_ID": str(domain), "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST",
-                "ROS_LOG_DIR": str(tmp_path / "roslog"), "HAWT_RUNS_DIR": str(runs),
-                "HAWT_VENV": str(BIN.parent), "PYTHONUNBUFFERED": "1"})
+    env = child_env(domain, tmp_path, HAWT_RUNS_DIR=str(runs), HAWT_VENV=str(BIN.parent),
+                    PYTHONUNBUFFERED="1")
     for k in ("HAWT_ROS_FAKE", "HAWT_ROS_FAKE_PARTS", "RCUTILS_CONSOLE_OUTPUT_FORMAT"):
         env.pop(k, None)
     log_path = tmp_path / "run.log"
