@@ -227,6 +227,17 @@ def run_cli(args, domain: int, tmp_path: Path, timeout: float = 60.0, **kw):
                           timeout=timeout, cwd=str(tmp_path), **kw)
 
 
+def publish_rate(col: Collector, start: int, seconds: float, node: NodeProcess = None):
+    """(rate [Hz], window [s]) of the messages ``col`` receives from index ``start`` on, over
+    a window of ``seconds`` (bounded wait; it ends early if ``node`` exits)."""
+    t0 = time.monotonic()
+    wait_until(lambda: time.monotonic() - t0 >= seconds
+               or (node is not None and not node.alive()), 60.0)
+    items = col.snapshot()[start:]
+    window = items[-1][0] - items[0][0]
+    return (len(items) - 1) / window, window
+
+
 def stamp_ns(stamp) -> int:
     return stamp.sec * 1_000_000_000 + stamp.nanosec
 
@@ -336,12 +347,7 @@ def test_publishes_joint_states_blades_markers_at_rate(spawn):
     bd = cli.subscribe(BladeDeflection, "/blade_deflections")
     mk = cli.subscribe(MarkerArray, "/blade_markers")
     first_message(node, js)
-    n0 = len(js)
-    t0 = time.monotonic()
-    wait_until(lambda: time.monotonic() - t0 >= 3.0 or not node.alive(), 60.0)  # a 3 s window
-    items = js.snapshot()[n0:]
-    window = items[-1][0] - items[0][0]
-    rate = (len(items) - 1) / window
+    rate, window = publish_rate(js, len(js), 3.0, node)        # a 3 s window
     print(f"\njoint_states: {rate:.2f} Hz over {window:.2f} s (requested 10 Hz)")
     assert 7.0 <= rate <= 13.0, node.log()
     msgs = js.msgs()
@@ -745,10 +751,7 @@ def test_runtime_parameter_changes(spawn, tmp_path):
     assert r.successful, r.reason
     n0 = len(js)
     wait_until(lambda: len(js) >= n0 + 2, 5.0)
-    t0 = time.monotonic()
-    wait_until(lambda: time.monotonic() - t0 > 2.5, 60.0)  # a 2.5 s window
-    items = js.snapshot()[n0 + 1:]
-    rate = (len(items) - 1) / (items[-1][0] - items[0][0])
+    rate, _ = publish_rate(js, n0 + 1, 2.5)                    # a 2.5 s window
     print(f"\nafter publish_rate:=4.0: {rate:.2f} Hz")
     assert 3.0 <= rate <= 5.0
     # recording switched on and off at runtime
