@@ -80,7 +80,9 @@ class WindowSolver:
     it); ``diff`` (n,) bool: the differential unknowns.  ``tol``: Newton tolerance on the
     scaled increment (Hairer & Wanner's stopping test, as the step-wise solver).
     ``azimuth_updates``: replace the rigid rows and columns at every window's centre (needed
-    when they vary with the azimuth: the yaw is free or gravity acts; pointless otherwise).
+    when they vary with the azimuth: the yaw is free or gravity acts; pointless otherwise);
+    requires ``model.coupling_jacobians`` (rigid-body unknowns, rigid tower), which the
+    caller checks (Simulator._coupling_varies).
     """
 
     #: a window is "slow" with a larger contraction rate or more iterations: the base is
@@ -105,9 +107,7 @@ class WindowSolver:
         self.tol = float(tol)
         self.max_iter = int(max_iter)
         self.nr = int(getattr(model, "nq", 0)) + int(getattr(model, "nu", 0))
-        self.azimuth_updates = bool(azimuth_updates and self.nr > 0
-                                    and hasattr(model, "coupling_jacobians")
-                                    and getattr(model, "tower", None) is None)
+        self.azimuth_updates = bool(azimuth_updates)
         if self.nr and not np.all(self.di[:self.nr] == np.arange(self.nr)):
             raise ValueError("window solver: the rigid unknowns must be the first, "
                              "differential ones")
