@@ -8,8 +8,9 @@ for each N: the real-time factor and ms per step of the default window solver
 iteration) and of the step-by-step solver (sparse LU per step), their ratio, the window
 solver's iterations per window and full Jacobians, and its per-step cost relative to N = 4.
 One core (run with OPENBLAS_NUM_THREADS=1). The wall time counts everything the steps do,
-including the first Jacobian and its inverse. Timings are the best of --repeat runs (the
-machine is shared). docs/simulation.md has the figures.
+including the first Jacobian and its inverse. Timings are the best of several runs (the
+machine is shared): --repeat runs of the window solver, max(1, --repeat - 1) of the slower
+step-by-step solver. docs/simulation.md has the figures.
 """
 import argparse
 import cProfile
@@ -50,7 +51,8 @@ def main():
         pr.disable()
         pstats.Stats(pr).sort_stats("tottime").print_stats(15)
         return
-    print(f"{a.revs:g} revolutions, 1 deg steps, best of {a.repeat}")
+    print(f"{a.revs:g} revolutions, 1 deg steps, best of {a.repeat} (window) and "
+          f"{max(1, a.repeat - 1)} (step) runs")
     print(f"{'yaw':<7}{'N':>4}{'RTF window':>12}{'ms/step':>9}{'RTF step':>10}{'ms/step':>9}"
           f"{'speed-up':>10}{'it/window':>11}{'jac':>5}{'cost vs N=4':>13}")
     for yaw_free in (False, True):
