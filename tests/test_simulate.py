@@ -486,6 +486,8 @@ def test_window_steps_meet_the_newton_tolerance():
           f"{sim.summary()}")
     assert sim._win.windows == 4
     assert worst < 10 * tol
+
+
 @pytest.mark.parametrize("yaw_free", [False, True], ids=["yaw-locked", "yaw-free"])
 def test_window_solver_equals_step_by_step_newton(yaw_free):
     """Reference: the step-by-step Newton solver (sparse LU, its own predictor and stopping
