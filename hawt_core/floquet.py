@@ -68,7 +68,6 @@ _RADAU_RHO = _RADAU_W.sum(axis=1)
 
 DEFAULT_STEPS = {"radau": 256, "paper": 1000}
 _SETTLE_STEPS = 3
-_SETTLE_LOWRANK = True        # the settling steps use the low-rank stage update too
 
 
 # --------------------------------------------------------------------------------------------
@@ -205,7 +204,6 @@ class FourierCoefficients:
             if K < 0:
                 raise ValueError("harmonics must be >= 0")
             levels = [2 * K + 1]
-        self.evaluations = 0
         for li, N in enumerate(levels):
             ts = T * np.arange(N) / N
             mats = [sample(t) for t in ts]
@@ -258,8 +256,8 @@ class FourierCoefficients:
         sA = max(np.max(np.abs(self.cA), initial=0.0), 1e-300)
         keep = []
         for j in range(1, K + 1):
-            mE = max(np.max(np.abs(self.cE[[j, K + j]]), initial=0.0) / sE, 0.0)
-            mA = max(np.max(np.abs(self.cA[[j, K + j]]), initial=0.0) / sA, 0.0)
+            mE = np.max(np.abs(self.cE[[j, K + j]]), initial=0.0) / sE
+            mA = np.max(np.abs(self.cA[[j, K + j]]), initial=0.0) / sA
             if max(mE, mA) > 0.01 * self.tol:
                 keep.append(j)
         keep = np.array(keep, dtype=int)
@@ -534,8 +532,6 @@ class _Stepper:
             except _PatternChanged:
                 continue        # pattern grew: rebuild templates and redo this chunk
             ns = ts.size // m
-            if self.version != self.coeffs.version:
-                self._build()
             for i in range(m):
                 X = self.step(X, h, Ed[i * ns:(i + 1) * ns], Ad[i * ns:(i + 1) * ns])
                 k += 1
@@ -766,10 +762,11 @@ class _LowRank:
 
 
 def _settle(coeffs, h: float, t_end: float, lowrank: Optional[bool] = False,
-            stepper: Optional["_Stepper"] = None) -> np.ndarray:
+            stepper: Optional["_Stepper"] = None) -> tuple[np.ndarray, int]:
     """_SETTLE_STEPS Radau IIA steps of length h ending at t_end, applied to all differential
     unit vectors (the algebraic columns are irrelevant: a step depends on x0 only via E x0).
-    ``stepper``: a Radau stepper to use (and whose low-rank data for h to share)."""
+    ``stepper``: a Radau stepper to use (and whose low-rank data for h to share).  Returns the
+    end values and the number of factorizations."""
     dae = coeffs.dae
     diff = np.flatnonzero(dae.differential)
     X0 = np.zeros((dae.n, diff.size))
@@ -922,7 +919,7 @@ def _grid(steps: int, samples: int, nb: int) -> tuple[int, int]:
     """Steps per period (multiple of nb) and a sample count M | steps, nb | M, M >= samples
     where possible."""
     steps = int(math.ceil(steps / nb) * nb)
-    cands = [m for m in range(nb, steps + 1, nb) if steps % m == 0 and (steps // m) * m == steps]
+    cands = [m for m in range(nb, steps + 1, nb) if steps % m == 0]
     good = [m for m in cands if m >= samples]
     M = min(good) if good else max(cands)
     return steps, M
@@ -956,9 +953,8 @@ def monodromy(dae: LinearPeriodicDAE, method: str = "radau", steps: Optional[int
     h = dae.period / K
     coeffs = _make_coefficients(dae, coefficients, harmonics, fourier_tol)
     stepper = _Stepper(coeffs, method, lowrank=lowrank)
-    share = method == "radau" and _SETTLE_LOWRANK      # the settling steps with h reuse its data
-    Z, s, d, nf = _consistent_basis(coeffs, h, 0.0, dynamic_dim,
-                                    lowrank=lowrank if _SETTLE_LOWRANK else False,
+    share = method == "radau"      # the settling steps with h reuse its data
+    Z, s, d, nf = _consistent_basis(coeffs, h, 0.0, dynamic_dim, lowrank=lowrank,
                                     stepper=stepper if share else None)
     if share:
         nf -= stepper.factorizations      # those are counted in stepper.factorizations
@@ -969,7 +965,6 @@ def monodromy(dae: LinearPeriodicDAE, method: str = "radau", steps: Optional[int
         rows = diff if observed is None else np.asarray(observed, dtype=int)
         rows = _closure_rows(rows, dae.S if fast else None, nb)
     nsteps = K // nb
-    diff = np.flatnonzero(dae.differential)
     X0 = np.eye(dae.n) if full else Z
     Y, smp = stepper.march(X0, 0.0, h, nsteps, store_every=K // M, store_rows=rows)
     if fast:
