@@ -287,18 +287,14 @@ def _mac_matrix(A: np.ndarray, B: np.ndarray, max_shift: int = 0, step: int = 1)
     looking one).  2-D A, B are single vectors (m, p), (m, q)."""
     if A.ndim == 2:
         A, B = A[None], B[None]
-    den = np.outer((np.abs(A) ** 2).sum((0, 1)), (np.abs(B) ** 2).sum((0, 1)))
-    den = np.where(den > 0, den, 1.0)
-    best, arg = _mac_shift(A, B, max_shift, step, den)
-    return best
+    return _mac_shift(A, B, max_shift, step)[0]
 
 
-def _mac_shift(A, B, max_shift, step, den=None):
+def _mac_shift(A, B, max_shift, step):
     """(best MAC (p, q), the re-indexing s achieving it (p, q)): harmonic k of A against
     harmonic k + s of B, i.e. p_B = p_A e^{i s Omega t} and f_B = f_A - s per-rev."""
-    if den is None:
-        den = np.outer((np.abs(A) ** 2).sum((0, 1)), (np.abs(B) ** 2).sum((0, 1)))
-        den = np.where(den > 0, den, 1.0)
+    den = np.outer((np.abs(A) ** 2).sum((0, 1)), (np.abs(B) ** 2).sum((0, 1)))
+    den = np.where(den > 0, den, 1.0)
     H = A.shape[0]
     best = np.zeros(den.shape)
     arg = np.zeros(den.shape, int)
@@ -325,7 +321,7 @@ def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
     S = len(points)
     tracks: list = []   # dicts: label info, per-speed values, reference vector and its offset
 
-    def new_track(i, m, v):
+    def new_track(m, v):
         t = {"label": m["label"], "family": m["family"], "symmetry": m["symmetry"],
              "index": m["index"], "vals": np.full((S, 6), np.nan), "vec": v, "off": 0,
              "f": m["frequency_hz"]}
@@ -357,7 +353,7 @@ def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
         w = float(p.get("speed", np.nan))
         if not tracks:
             for j, m in enumerate(modes):
-                put(new_track(i, m, V[..., j]), i, m, V[..., j], 1.0, 0, w)
+                put(new_track(m, V[..., j]), i, m, V[..., j], 1.0, 0, w)
             continue
         if V.shape[:-1] != tracks[0]["vec"].shape:
             raise ValueError("campbell: the eigenvectors of different speeds have different "
@@ -380,7 +376,7 @@ def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
                 taken.add(b)
         for j, m in enumerate(modes):
             if j not in taken:
-                put(new_track(i, m, V[..., j]), i, m, V[..., j], float("nan"), 0, w)
+                put(new_track(m, V[..., j]), i, m, V[..., j], float("nan"), 0, w)
     speeds = np.array([float(p.get("speed", np.nan)) for p in points])
     # unique labels (a label reused by a track born later gets a suffix)
     seen = {}
@@ -498,7 +494,7 @@ def campbell(turbine: Turbine, speeds, elements: Optional[int] = None,
             try:
                 results[i] = f.result()
             except (ValueError, RuntimeError, ArithmeticError, np.linalg.LinAlgError) as exc:
-                if errors == "raise" or isinstance(exc, cf.CancelledError):
+                if errors == "raise":
                     raise
                 failures.append((i, exc))
             if progress is not None:

@@ -256,9 +256,10 @@ def _tower_motion(model: TurbineModel, x):
     return float(parts[j]), TOWER_DIRECTIONS[j]
 
 
-def _averaged_modes(dae: LinearPeriodicDAE, rows, weights, omega):
+def _averaged_modes(dae: LinearPeriodicDAE, rows, weights):
     """Finite eigenpairs of the time-averaged pencil (exact for harmonics up to 4; the
-    5-point grid is the Fourier sampler's first grid, so these linearizations are cached)."""
+    5-point grid is the Fourier sampler's first grid, so these linearizations may still be in
+    periodic_dae's cache of recent ones, which is cleared when it exceeds 64 entries)."""
     ts = dae.period * np.arange(5) / 5
     E0 = sum(dae.E(t).toarray() for t in ts) / len(ts)
     A0 = sum(dae.A(t).toarray() for t in ts) / len(ts)
@@ -283,10 +284,10 @@ def label_modes(model: TurbineModel, fl, columns) -> list:
     sec = model.turbine.blade.sections
     r_g = float(np.sqrt(np.mean(sec.i1) / np.mean(sec.mass)))  # torsion radius of gyration
     nb = model.n_blades
+    pos = {int(r): j for j, r in enumerate(fl.sample_rows)}
     modes = []
     for i in columns:
         x = fl.eigenvectors[:, i]
-        pos = {int(r): j for j, r in enumerate(fl.sample_rows)}
         # rigid rotations: RMS over the revolution of the periodic eigenvector (a teeter
         # oscillating at 1/rev may pass through zero at t = 0), as blade-tip metres
         rigid = {nm: R * float(np.sqrt(np.mean(np.abs(fl.periodic_sample(i)[:, pos[lay[nm]]]) ** 2)))
@@ -454,7 +455,7 @@ def modal_analysis(turbine: Turbine, elements: Optional[int] = None,
     stage(0.85, "labelling modes")
     omega = model.rotor_speed
     limit = min(steps / STEPS_PER_CYCLE[method], samples / 2.5)
-    lam0, X0 = _averaged_modes(dae, rows, wts, omega)
+    lam0, X0 = _averaged_modes(dae, rows, wts)
     resolved = []
     unresolved = 0
     for i in fl.modes():

@@ -323,7 +323,7 @@ def _draw_twist(ax, geom, theta1, P0, amp):
     ax.legend(fontsize=7, loc="lower left")
 
 
-def _mode_title(result, mode) -> str:
+def _mode_title(mode) -> str:
     pr = mode.frequency_per_rev
     digits = 4 if mode.family == "torsion" else 2
     return f"{mode_label(mode)} ({pr:.{digits}f} /rev)"
@@ -359,7 +359,7 @@ def plot_turbine_modes(result, path_or_dir, modes=None) -> list:
             ncol = 3 if m.family == "torsion" else 2
             fig, axes = plt.subplots(1, ncol, figsize=(4.2 * ncol, 5.2), squeeze=False)
             amp = _draw_mode(list(axes[0]), result, m)
-            fig.suptitle(f"{_mode_title(result, m)}\n{m.frequency_hz:.4g} Hz, damping "
+            fig.suptitle(f"{_mode_title(m)}\n{m.frequency_hz:.4g} Hz, damping "
                          f"{m.damping_ratio:.2e}, displacements x{amp:.3g}", fontsize=11)
             fig.tight_layout()
             out = target / f"{mode_file_stem(pos, m)}.png"
@@ -373,7 +373,7 @@ def plot_turbine_modes(result, path_or_dir, modes=None) -> list:
         if m.family != "torsion":
             row[2].set_visible(False)
         _draw_mode(list(row) if m.family == "torsion" else list(row[:2]), result, m)
-        row[0].text(0.02, 0.98, _mode_title(result, m), transform=row[0].transAxes,
+        row[0].text(0.02, 0.98, _mode_title(m), transform=row[0].transAxes,
                     va="top", fontsize=10, fontweight="bold")
     fig.tight_layout()
     fig.savefig(target, format="png", dpi=80)
