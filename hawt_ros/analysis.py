@@ -100,12 +100,7 @@ def result_to_plain(result) -> Dict[str, Any]:
             "shape": shape,
         })
     settings = dict(getattr(result, "settings", {}) or {})
-    try:
-        as_dict = result.to_dict()
-    except Exception:  # noqa: BLE001
-        as_dict = {"settings": settings,
-                    "modes": [{k: v for k, v in m.items() if k != "shape"} for m in modes]}
-    return {"modes": modes, "settings": settings, "dict": as_dict,
+    return {"modes": modes, "settings": settings,
             "unresolved": int(getattr(result, "unresolved", 0) or 0),
             "compute_time": _num(getattr(result, "compute_time", math.nan))}
 
@@ -181,10 +176,9 @@ class Job:
     """One analysis job. ``status``: 'queued', 'running', then 'ok', 'cancelled', 'invalid'
     or 'error'; ``result`` (plain dict, see result_to_plain) when ok; ``message``."""
 
-    def __init__(self, key, kwargs: dict, shareable: bool):
+    def __init__(self, key, kwargs: dict):
         self.key = key
         self.kwargs = kwargs
-        self.shareable = shareable
         self.status = "queued"
         self.result: Optional[Dict[str, Any]] = None
         self.message = ""
@@ -194,17 +188,9 @@ class Job:
         self._done = threading.Event()
         self._cancel = threading.Event()
         self._lock = threading.Lock()
-        self._done_callbacks: List[Callable[["Job"], None]] = []
         self._progress_callbacks: List[Callable[[float, str], None]] = []
 
     # -- callbacks
-    def add_done_callback(self, fn: Callable[["Job"], None]) -> None:
-        with self._lock:
-            if not self._done.is_set():
-                self._done_callbacks.append(fn)
-                return
-        fn(self)
-
     def add_progress_callback(self, fn: Callable[[float, str], None]) -> None:
         with self._lock:
             self._progress_callbacks.append(fn)
@@ -225,12 +211,6 @@ class Job:
                 return
             self.status, self.message, self.result = status, message, result
             self._done.set()
-            cbs, self._done_callbacks = self._done_callbacks, []
-        for fn in cbs:
-            try:
-                fn(self)
-            except Exception:  # noqa: BLE001
-                pass
 
     # -- control
     def cancel(self) -> None:
@@ -267,7 +247,6 @@ class AnalysisRunner:
         self._stopping = threading.Event()
         self._current: Optional[Job] = None
         self._proc = None
-        self.completed = 0
         self._thread = threading.Thread(target=self._loop, name="hawt-analysis", daemon=True)
         self._thread.start()
 
@@ -287,29 +266,25 @@ class AnalysisRunner:
         key = tuple(sorted(kwargs.items()))
         with self._lock:
             if self._stopping.is_set():
-                job = Job(key, kwargs, shareable)
+                job = Job(key, kwargs)
                 job._finish("error", "the node is shutting down")
                 return job
             cached = self._cache.get(key)
             if cached is not None:
                 self._cache.move_to_end(key)
-                job = Job(key, kwargs, shareable)
+                job = Job(key, kwargs)
                 job.cached = True
-                job._progress(1.0, "done (cached result)")
                 job._finish("ok", "cached result", cached)
                 return job
             if shareable:
                 running = self._inflight.get(key)
                 if running is not None and not running.done():
                     return running
-            job = Job(key, kwargs, shareable)
+            job = Job(key, kwargs)
             if shareable:
                 self._inflight[key] = job
         self._jobs.put(job)
         return job
-
-    def busy(self) -> bool:
-        return self._current is not None
 
     def _loop(self) -> None:
         while True:
@@ -329,7 +304,6 @@ class AnalysisRunner:
                 self._complete(job, "error", f"{type(exc).__name__}: {exc}")
             finally:
                 self._current = None
-                self.completed += 1
 
     def _complete(self, job: Job, status: str, message: str = "", result=None) -> None:
         """Cache the result and retire the job BEFORE waking its waiters, so that a request

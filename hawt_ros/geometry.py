@@ -35,9 +35,9 @@ class RotorGeometry:
     def q(self, named: dict) -> np.ndarray:
         """Rigid coordinates vector from Simulator.named()."""
         out = []
-        if getattr(self.rigid, "yaw_free", True) and "yaw" in self.rigid.coordinates:
+        if "yaw" in self.rigid.coordinates:
             out.append(float(named.get("yaw", 0.0)))
-        if getattr(self.rigid, "teeter", True) and "teeter" in self.rigid.coordinates:
+        if "teeter" in self.rigid.coordinates:
             out.append(float(named.get("teeter", 0.0)))
         return np.array(out, dtype=float)
 

@@ -169,10 +169,10 @@ class HawtNode(Node):
         except (ValueError, NotImplementedError) as exc:
             raise StartupError(f"turbine {self.turbine_path}: {exc}") from None
         self.omega = float(self.model.rotor_speed)
-        self.dt = math.radians(self.settings.step_deg) / self.omega if self.omega > 0 else 0.0
         if self.omega <= 0:
             raise StartupError(f"turbine {self.turbine_path}: rotor speed {self.omega} rad/s; "
                                "the simulation needs a spinning rotor (speed > 0)")
+        self.dt = math.radians(self.settings.step_deg) / self.omega
         self.geometry = RotorGeometry(self.model.rigid)
         self.n_blades = int(self.model.n_blades)
         self._analysis_elements = int(self.model.beam.N)
@@ -195,7 +195,6 @@ class HawtNode(Node):
         self.pub_clock = None
         if self.settings.real_time_factor == 0:
             self.pub_clock = self.create_publisher(Clock, "/clock", STATE_QOS)
-        self._qos = {p.topic_name: STATE_QOS for p in self._publishers_list()}
 
         self.runner = AnalysisRunner(self.turbine, logger=self.get_logger().info)
         self.srv = self.create_service(ModalAnalysisSrv, "modal_analysis", self._on_service,
@@ -608,7 +607,7 @@ class HawtNode(Node):
             out.append(msg)
         return out
 
-    def _fill(self, out, job: Optional[Job], req, error: Optional[str] = None, t0: float = 0.0):
+    def _fill(self, out, job: Optional[Job], req, error: Optional[str] = None):
         """Fill a service response / action result."""
         if error is not None:
             out.success = False
@@ -976,7 +975,6 @@ def main(argv: Optional[List[str]] = None) -> int:
     node = None
     executor = None
     status = None
-    code = 0
     try:
         try:
             node = HawtNode()
@@ -1022,7 +1020,7 @@ def main(argv: Optional[List[str]] = None) -> int:
     close_all_writers()
     sys.stdout.flush()
     sys.stderr.flush()
-    os._exit(code)
+    os._exit(0)
 
 
 if __name__ == "__main__":

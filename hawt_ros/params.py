@@ -194,9 +194,6 @@ class AnalysisRequest:
     steps: Optional[int]
     method: str
 
-    def key(self) -> tuple:
-        return (self.elements, self.rotor_speed, self.steps, self.method)
-
     def as_kwargs(self) -> dict:
         return {"elements": self.elements, "rotor_speed": self.rotor_speed,
                 "steps": self.steps, "method": self.method}
