@@ -173,24 +173,13 @@ class Track:
     real_per_rev: np.ndarray
     damping_ratio: np.ndarray
     mac: np.ndarray = field(repr=False)
-    #: integer per-rev added to the dominant frequency for a continuous curve (see
-    #: :func:`unwrap_harmonics`); 0 where absent
-    shift: np.ndarray = field(default=None, repr=False)
-    #: frequency_per_rev + shift, and the same in Hz: what the Campbell plot draws
-    continuous_per_rev: np.ndarray = field(default=None, repr=False)
-    continuous_hz: np.ndarray = field(default=None, repr=False)
-
-    def __post_init__(self):
-        if self.shift is None:
-            self.shift = np.where(np.isfinite(self.frequency_per_rev), 0.0, np.nan)
-        if self.continuous_per_rev is None:
-            self.continuous_per_rev = self.frequency_per_rev + np.nan_to_num(self.shift)
-        if self.continuous_hz is None:
-            with np.errstate(invalid="ignore", divide="ignore"):
-                ratio = np.where(self.frequency_per_rev != 0,
-                                 self.frequency_hz / self.frequency_per_rev, np.nan)
-            self.continuous_hz = np.where(np.nan_to_num(self.shift) == 0, self.frequency_hz,
-                                          self.continuous_per_rev * ratio)
+    #: integer per-rev added to the dominant frequency for a continuous curve (the harmonic
+    #: re-indexing found by the MAC, or :func:`unwrap_harmonics`); NaN where absent
+    shift: np.ndarray = field(repr=False)
+    #: frequency_per_rev + shift, and the same in Hz (continuous_per_rev times the speed in
+    #: rev/s where shifted, frequency_hz elsewhere): what the Campbell plot draws
+    continuous_per_rev: np.ndarray = field(repr=False)
+    continuous_hz: np.ndarray = field(repr=False)
 
     def present(self) -> np.ndarray:
         return np.isfinite(self.frequency_hz)
