@@ -44,10 +44,11 @@ class RotorGeometry:
     def frames(self, named: dict, t: float) -> dict:
         return self.rigid.frames(self.q(named), float(t))
 
-    def loads(self, named: dict, t: float, root_force, root_moment) -> tuple:
+    def loads(self, named: dict, t: float, root_force, root_moment, frames=None) -> tuple:
         """(yaw moment, teeter moment, shaft torque) [N m] from the blade root loads
-        ``root_force``/``root_moment`` (Nb, 3) in each blade's root frame."""
-        fr = self.frames(named, t)
+        ``root_force``/``root_moment`` (Nb, 3) in each blade's root frame. ``frames``:
+        ``self.frames(named, t)`` when the caller has it already."""
+        fr = self.frames(named, t) if frames is None else frames
         Y, S, H, B = fr["Y"], fr["S"], fr["H"], fr["B"]
         Fb = np.asarray(root_force, float).reshape(self.n_blades, 3)
         Mb = np.asarray(root_moment, float).reshape(self.n_blades, 3)
@@ -60,10 +61,11 @@ class RotorGeometry:
         m_ty = (np.cross(r_ty, F) + M).sum(axis=0)         # moment about TY
         return float(m_ty @ y1), float(m_sh @ h2), float(m_sh @ s3)
 
-    def blade_points(self, named: dict, t: float, stations, u, frame: str = "nacelle") -> np.ndarray:
+    def blade_points(self, named: dict, t: float, stations, u, frame: str = "nacelle",
+                     frames=None) -> np.ndarray:
         """Deformed reference-line points of every blade, (Nb, S, 3), in ``frame``
         ('nacelle' or 'hub'). ``stations`` (Nb, S) span coordinates [m], ``u`` (Nb, S, 3)
-        displacements in the root frames."""
+        displacements in the root frames. ``frames``: as for :meth:`loads`."""
         st = np.asarray(stations, float)
         u = np.asarray(u, float)
         local = u.copy()
@@ -74,7 +76,7 @@ class RotorGeometry:
             return p_h
         if frame != "nacelle":
             raise ValueError(f"frame: {frame!r} is not allowed; choose nacelle or hub")
-        fr = self.frames(named, t)
+        fr = self.frames(named, t) if frames is None else frames
         Y, S, H = fr["Y"], fr["S"], fr["H"]
         p_n = np.einsum("ij,ksj->ksi", H, p_h) + self.rigid.d * S[:, 2]   # inertial, from TY
         return np.einsum("ji,ksj->ksi", Y, p_n)            # components in the nacelle basis

@@ -1240,6 +1240,21 @@ class BagReader:
                              rec.publish_time, ch.metadata)
 
 
+def _topics_info(channels: Mapping[int, Any], schemas: Mapping[int, Any],
+                 counts: Mapping[int, int]) -> Dict[str, Dict[str, Any]]:
+    """bag_info's ``topics``: {topic: {type, count, type_hash, message_encoding}}."""
+    topics = {}
+    for cid, ch in channels.items():
+        schema = schemas.get(ch.schema_id)
+        topics[ch.topic] = {
+            "type": schema.name if schema else "",
+            "count": int(counts.get(cid, 0)),
+            "type_hash": ch.metadata.get("topic_type_hash"),
+            "message_encoding": ch.message_encoding,
+        }
+    return topics
+
+
 def _from_summary(path: Path) -> Optional[Dict[str, Any]]:
     """bag_info from the summary section of a finalized file (None if unusable)."""
     from mcap.reader import make_reader
@@ -1252,15 +1267,8 @@ def _from_summary(path: Path) -> Optional[Dict[str, Any]]:
             if summary is None or summary.statistics is None:
                 return None
             stats = summary.statistics
-            topics = {}
-            for cid, ch in summary.channels.items():
-                schema = summary.schemas.get(ch.schema_id)
-                topics[ch.topic] = {
-                    "type": schema.name if schema else "",
-                    "count": int(stats.channel_message_counts.get(cid, 0)),
-                    "type_hash": ch.metadata.get("topic_type_hash"),
-                    "message_encoding": ch.message_encoding,
-                }
+            topics = _topics_info(summary.channels, summary.schemas,
+                                  stats.channel_message_counts)
             metadata = {}
             for m in reader.iter_metadata():
                 metadata[m.name] = dict(m.metadata)
@@ -1300,15 +1308,7 @@ def bag_info(path: os.PathLike | str) -> Dict[str, Any]:
         n += 1
         start = rec.log_time if start is None else min(start, rec.log_time)
         end = rec.log_time if end is None else max(end, rec.log_time)
-    topics = {}
-    for cid, ch in scan.channels.items():
-        schema = scan.schemas.get(ch.schema_id)
-        topics[ch.topic] = {
-            "type": schema.name if schema else "",
-            "count": counts.get(cid, 0),
-            "type_hash": ch.metadata.get("topic_type_hash"),
-            "message_encoding": ch.message_encoding,
-        }
+    topics = _topics_info(scan.channels, scan.schemas, counts)
     return {
         "path": str(p),
         "profile": scan.header.profile if scan.header else "",

@@ -81,9 +81,10 @@ class StartupError(RuntimeError):
     """The node cannot start (bad parameter, unreadable turbine file, ...)."""
 
 
-def _stderr_is_tty() -> bool:
+def _stderr_is_tty(stream=None) -> bool:
+    """Whether ``stream`` (default sys.stderr) is a terminal (False if that cannot be told)."""
     try:
-        return bool(sys.stderr.isatty())
+        return bool((sys.stderr if stream is None else stream).isatty())
     except (AttributeError, ValueError, OSError):
         return False
 
@@ -436,9 +437,10 @@ class HawtNode(Node):
             rot = np.array([d["theta"] for d in defl], float)
             rf = np.array([d["root_force"] for d in defl], float)
             rm = np.array([d["root_moment"] for d in defl], float)
-            loads = self.geometry.loads(named, t, rf, rm)
+            frames = self.geometry.frames(named, t)
+            loads = self.geometry.loads(named, t, rf, rm, frames)
             points = self.geometry.blade_points(named, t, stations, disp,
-                                                self.settings.marker_frame)
+                                                self.settings.marker_frame, frames)
         except Exception as exc:  # noqa: BLE001
             self._fail(f"reading the simulation state at t = {t:.6f} s failed: "
                        f"{type(exc).__name__}: {exc}")
@@ -783,10 +785,7 @@ class StatusLine:
         self.node = node
         self.stream = stream if stream is not None else sys.stderr
         if tty is None:
-            try:
-                tty = bool(self.stream.isatty())
-            except (AttributeError, ValueError, OSError):
-                tty = False
+            tty = _stderr_is_tty(self.stream)
         self.tty = tty
         self.period = STATUS_TTY_PERIOD if tty else STATUS_PLAIN_PERIOD
         self.window = 2.0 if tty else STATUS_PLAIN_PERIOD

@@ -207,10 +207,9 @@ def validate_request(rotor_speed: Any = 0.0, elements: Any = 0, steps: Any = 0,
     Conventions of hawt_msgs/srv/ModalAnalysis: ``rotor_speed`` 0 = the turbine's nominal
     speed (negative, NaN or infinite: rejected); ``elements`` 0 = the node's default;
     ``steps`` 0 = the method's default; ``method`` '' = 'radau'."""
-    if not _is_number(rotor_speed) or math.isnan(float(rotor_speed)) \
-            or math.isinf(float(rotor_speed)) or float(rotor_speed) < 0:
-        raise ParameterError("rotor_speed", rotor_speed,
-                             "need a finite number > 0 [rad/s], or 0 = the turbine's nominal speed")
+    allowed = "need a finite number > 0 [rad/s], or 0 = the turbine's nominal speed"
+    if _number("rotor_speed", rotor_speed, allowed) < 0:
+        raise ParameterError("rotor_speed", rotor_speed, allowed)
     if float(rotor_speed) > 1000:
         raise ParameterError("rotor_speed", rotor_speed, "need at most 1000 rad/s")
     if not _is_int(elements) or not 0 <= elements <= MAX_ELEMENTS:
