@@ -46,8 +46,8 @@ class Node:
         for k, v in params.items():
             args += ["-p", f"{k}:={v}"]
         self.log = tmp / f"node-{domain}.log"
-        self.proc = subprocess.Popen(args, env=e, stdout=open(self.log, "w"),
-                                     stderr=subprocess.STDOUT)
+        with open(self.log, "w") as out:      # the child keeps its own copy of the descriptor
+            self.proc = subprocess.Popen(args, env=e, stdout=out, stderr=subprocess.STDOUT)
 
     def stop(self):
         if self.proc.poll() is None:
