@@ -712,3 +712,64 @@ def test_rigid_rotor_teeter_frequency_end_to_end():
     C = tb.hub.inertia_longitudinal + 2 * (S2 + ell * I3)
     assert abs(freq - np.sqrt((C - A) / B)) <= 1e-7
     assert abs(freq - 0.99901) < 5e-6
+
+
+# ---------------------------------------------------------------- batches of instants
+# With a rigid tower every public method of RigidSystem accepts a batch (leading dimensions on
+# q, u, their rates, t and the root loads). Reference: the same method evaluated one instant
+# at a time; the batched results must equal those to round-off (1e-12 relative).
+BATCH_RTOL = 1e-12
+BATCH_K = 5
+BATCH_CONFIGS = {
+    "paper": lambda: paper_turbine(),
+    "general_gravity": lambda: general_turbine(blades=2, gravity=True),
+    "general_no_gravity": lambda: general_turbine(blades=2, gravity=False),
+    "three_blades_rigid_hub": lambda: general_turbine(blades=3, teeter=False, gravity=True),
+    "yaw_locked": lambda: general_turbine(blades=2, yaw_free=False, gravity=True),
+    "yaw_locked_rigid_hub": lambda: general_turbine(blades=2, yaw_free=False, teeter=False,
+                                                    gravity=True),
+}
+
+
+def _batch_close(batch, single):
+    single = np.asarray(single)
+    batch = np.asarray(batch)
+    assert batch.shape == single.shape
+    scale = max(np.abs(single).max(initial=0.0), 1e-300)
+    np.testing.assert_allclose(batch, single, rtol=BATCH_RTOL, atol=BATCH_RTOL * scale)
+
+
+@pytest.fixture(params=sorted(BATCH_CONFIGS))
+def batch_case(request):
+    rs = RigidSystem(BATCH_CONFIGS[request.param]())
+    rng = np.random.default_rng(7)
+    nb = rs.n_blades
+    data = dict(q=0.2 * rng.standard_normal((BATCH_K, rs.n_q)),
+                qd=0.3 * rng.standard_normal((BATCH_K, rs.n_q)),
+                u=0.3 * rng.standard_normal((BATCH_K, rs.n_u)),
+                ud=0.5 * rng.standard_normal((BATCH_K, rs.n_u)),
+                t=rng.uniform(0.0, 2.0, BATCH_K),
+                F=1e3 * rng.standard_normal((BATCH_K, nb, 3)),
+                M=1e3 * rng.standard_normal((BATCH_K, nb, 3)))
+    return rs, data
+
+
+def test_batched_methods_equal_per_instant(batch_case):
+    """Reference: per-instant evaluation.  root_motion, gravity_in_root, kinematics, dynamics
+    and hub_kinetic_energy of a batch of instants equal the single-instant results."""
+    rs, d = batch_case
+    q, qd, u, ud, t, F, M = (d[k] for k in ("q", "qd", "u", "ud", "t", "F", "M"))
+    single = [dict(rm=rs.root_motion(q[i], u[i], t[i]),
+                   g=rs.gravity_in_root(q[i], t[i]),
+                   kin=rs.kinematics(q[i], qd[i], u[i], t[i]),
+                   dyn=rs.dynamics(q[i], u[i], ud[i], t[i], F[i], M[i]),
+                   ke=rs.hub_kinetic_energy(q[i], u[i], t[i])) for i in range(BATCH_K)]
+    v, w = rs.root_motion(q, u, t)
+    _batch_close(v, np.stack([s["rm"][0] for s in single]))
+    _batch_close(w, np.stack([s["rm"][1] for s in single]))
+    _batch_close(rs.gravity_in_root(q, t), np.stack([s["g"] for s in single]))
+    _batch_close(rs.kinematics(q, qd, u, t), np.stack([s["kin"] for s in single]))
+    _batch_close(rs.dynamics(q, u, ud, t, F, M), np.stack([s["dyn"] for s in single]))
+    ke = rs.hub_kinetic_energy(q, u, t)
+    assert np.shape(ke) == (BATCH_K,)
+    _batch_close(ke, np.array([s["ke"] for s in single]))
