@@ -186,6 +186,13 @@ class TurbineModel:
         self._reference_jac = None  # built on first use by jacobians_reference (tests only)
         self._beam_jac = ColouredJacobian(block_tridiagonal_pattern(self.beam.pattern_blocks()))
 
+    def dynamic_dimension(self) -> int:
+        """Number of dynamic states (finite eigenvalues of the linearized descriptor system):
+        two per rigid coordinate and per flexible section direction of every beam element;
+        equal to the exact deflation count (tests/test_assembly.py), without its O(n^3)."""
+        d = 2 * self.nq + self.n_blades * self.beam.dynamic_dimension()
+        return d + (self.tower.dynamic_dimension() if self.tower is not None else 0)
+
     def tower_top(self, ydot, y) -> Optional[np.ndarray]:
         """(5, 3) tower-top state [theta, V, Omega, Vdot, Omegadot] of the tower's tip node
         (tip section frame), or None for a rigid tower."""
@@ -533,9 +540,13 @@ class TurbineModel:
 
     # ------------------------------------------------------------------ symmetry
     def blade_relabelling(self) -> sp.csr_matrix:
-        """Matrix S relabelling the blades after 1/Nb revolution: blade k's unknowns move to
-        blade k+1's slot; rigid unknowns map as the rigid system says (the teeter angle of a
-        two-bladed hub changes sign). Used by Peters' Fast Floquet."""
+        """Matrix S of the blade-relabelling symmetry ``R(S ydot, S y, t + T/Nb) =
+        S R(ydot, y, t)``: after 1/Nb revolution blade k stands where blade k+1 stood, so
+        the state S y has blade k+1's unknowns in blade k's slot (S[k, k+1] = I); the rigid
+        unknowns map as the rigid system says (the teeter angle of a two-bladed hub changes
+        sign); the tower maps to itself. Used by Peters' Fast Floquet and the multi-blade
+        transform. (With two blades S is its own inverse, so the direction only shows from
+        three blades on.)"""
         rigid_sign = self.rigid.relabelling_signs()
         nr = self.nq + self.nu
         rows, cols, vals = list(range(nr)), list(range(nr)), list(rigid_sign)
@@ -546,8 +557,8 @@ class TurbineModel:
             vals += [1.0] * self.tower.n
         nb = self.beam.n
         for k in range(self.n_blades):
-            src = self.layout.blade_offset(k) + np.arange(nb)
-            dst = self.layout.blade_offset((k + 1) % self.n_blades) + np.arange(nb)
+            src = self.layout.blade_offset((k + 1) % self.n_blades) + np.arange(nb)
+            dst = self.layout.blade_offset(k) + np.arange(nb)
             rows += dst.tolist()
             cols += src.tolist()
             vals += [1.0] * nb

@@ -1018,6 +1018,40 @@ class FloquetResult:
     n_dynamic: int
     wall_time: float
     timings: dict = field(default_factory=dict)
+    #: positions in ``sample_rows`` and weights (on squared amplitudes) of the rows that
+    #: decided the dominant harmonic and the normalisation
+    observed: Optional[np.ndarray] = field(default=None, repr=False)
+    weights: Optional[np.ndarray] = field(default=None, repr=False)
+
+    def recombine(self, columns, Q: np.ndarray) -> None:
+        """Replace the modes ``columns`` (members of one cluster of equal exponents, all with
+        a positive-frequency upper member or all real) by the combinations ``V Q`` of their
+        eigenvectors and periodic samples (in place; the conjugate members follow), then
+        normalise them like :func:`periodic_modes`.  Used to turn an arbitrary basis of a
+        degenerate eigenspace into one of the symmetry classes."""
+        nu = self._n_upper
+        cols = [int(c) for c in columns]
+        conj = [nu <= c < 2 * nu for c in cols]
+        if any(conj) and not all(conj):
+            raise ValueError("recombine: mixed upper and conjugate members")
+        slot = [c - nu if c >= nu else c for c in cols]              # in _p_unique
+        Qe = np.conj(Q) if conj[0] else Q
+        P = self._p_unique[:, :, slot] @ Qe
+        V = self.eigenvectors[:, cols] @ Q
+        w = np.ones(len(self.sample_rows)) if self.weights is None else self.weights
+        obs = slice(None) if self.observed is None else self.observed
+        nrm = np.sqrt(np.einsum("r,mrk->k", w, np.abs(P[:, obs, :]) ** 2) / P.shape[0])
+        nrm[nrm == 0] = 1.0
+        P /= nrm
+        V /= (np.conj(nrm) if conj[0] else nrm)[None, :]
+        self._p_unique[:, :, slot] = P
+        self.eigenvectors[:, cols] = V
+        for c, s_ in zip(cols, slot):      # the partner members
+            if c < nu:
+                self.eigenvectors[:, c + nu] = np.conj(self.eigenvectors[:, c])
+            elif c < 2 * nu:
+                self.eigenvectors[:, c - nu] = np.conj(self.eigenvectors[:, c])
+        self.__dict__.pop("_periodic_samples_cache", None)
 
     @property
     def periodic_samples(self) -> np.ndarray:
@@ -1144,28 +1178,66 @@ def floquet_analysis(dae: LinearPeriodicDAE, method: str = "radau", steps: Optio
             else:
                 np.matmul(Srr, prev, out=cur)
             cur *= mus[None, None, :]
-    M = Xm.shape[0]
-    tm = np.arange(M) * T / M
     lam = mus ** nb
     eta0 = np.log(mus) * nb / T                     # e^{eta0 T} = lambda
-    P = Xm
+    t2 = time.perf_counter()
+    return periodic_modes(
+        eta0, Xm, mono.basis @ Vc, nu, period=T, sample_rows=obs_rows, observed=obs_local,
+        weights=w, multipliers=lam, method=method, steps=mono.steps, fast=mono.fast,
+        blades=nb, n_dynamic=d, start_time=t0,
+        timings={"monodromy": t1 - t0, "eigen": t2 - t1,
+                 "factorizations": mono.factorizations, "lowrank": mono.lowrank,
+                 "coefficient_evaluations": getattr(mono.coefficients, "evaluations", None),
+                 "fourier_harmonics": getattr(mono.coefficients, "harmonics", None),
+                 "fourier_error": getattr(mono.coefficients, "error", None)})
+
+
+def periodic_modes(eta0: np.ndarray, X: np.ndarray, x0: np.ndarray, n_upper: int, *,
+                   period: float, sample_rows: np.ndarray, observed: np.ndarray,
+                   weights: np.ndarray, multipliers: Optional[np.ndarray] = None,
+                   method: str, steps: int, fast: bool, blades: int, n_dynamic: int,
+                   start_time: Optional[float] = None, timings: Optional[dict] = None
+                   ) -> FloquetResult:
+    """A FloquetResult from solutions ``x_i(t) = p_i(t) exp(eta0_i t)`` (p periodic).
+
+    ``X`` (M, len(sample_rows), m): samples x_i(t_m) at ``t_m = m period / M`` over one full
+    period (any method: monodromy marching, Hill's method, multi-blade coordinates);
+    ``x0`` (n, m): x_i(0) on every state row; the first ``n_upper`` columns are the members
+    with a positive imaginary multiplier part (their conjugates are added), the rest real
+    ones.  ``observed`` (positions in ``sample_rows``) and ``weights`` (per observed row,
+    applied to squared amplitudes) decide the dominant harmonic k, which moves into the
+    exponent (eta = eta0 + i k Omega); p is shifted accordingly and normalised (weighted RMS
+    over the period 1, largest observed component real positive).  ``X`` is overwritten."""
+    T = float(period)
+    w0 = 2.0 * math.pi / T
+    nu = int(n_upper)
+    if start_time is None:
+        start_time = time.perf_counter()
+    eta0 = np.asarray(eta0, complex)
+    lam = np.exp(eta0 * T) if multipliers is None else np.asarray(multipliers, complex)
+    obs_local = np.asarray(observed, dtype=int)
+    w = np.asarray(weights, dtype=float).ravel()
+    M = X.shape[0]
+    tm = np.arange(M) * T / M
+    P = X
     P *= np.exp(-eta0[None, None, :] * tm[:, None, None])
     # the observed rows as a slice when they are all the sample rows in order (no copies)
-    obs_sel = (slice(None) if np.array_equal(obs_local, np.arange(len(obs_rows)))
+    obs_sel = (slice(None) if np.array_equal(obs_local, np.arange(len(sample_rows)))
                else obs_local)
     C = np.fft.fft(P[:, obs_sel, :], axis=0) / M    # (M, obs, modes)
     energy = np.einsum("r,krm->km", w, np.abs(C) ** 2)
     kk = np.fft.fftfreq(M, 1.0 / M).astype(int)
-    harm = np.zeros(len(mus), dtype=int)
-    share = np.zeros(len(mus))
-    for i in range(len(mus)):
+    nm = eta0.size
+    harm = np.zeros(nm, dtype=int)
+    share = np.zeros(nm)
+    for i in range(nm):
         e = energy[:, i]
         harm[i] = kk[_dominant_harmonic(e, kk, eta0[i].imag, w0, tie=1e-12)]
         share[i] = e.max() / max(e.sum(), 1e-300)
     eta = eta0 + 1j * harm * w0
     # build the full list: uppers, their conjugates, reals
     idx_up = np.arange(nu)
-    idx_re = np.arange(nu, len(mus))
+    idx_re = np.arange(nu, nm)
     all_eta = np.concatenate([eta[idx_up], np.conj(eta[idx_up]), eta[idx_re]])
     all_eta0 = np.concatenate([eta0[idx_up], np.conj(eta0[idx_up]), eta0[idx_re]])
     all_lam = np.concatenate([lam[idx_up], np.conj(lam[idx_up]), lam[idx_re]])
@@ -1173,8 +1245,7 @@ def floquet_analysis(dae: LinearPeriodicDAE, method: str = "radau", steps: Optio
     all_share = np.concatenate([share[idx_up], share[idx_up], share[idx_re]])
     rep = np.concatenate([eta[idx_up].imag >= 0, eta[idx_up].imag < 0,
                           np.ones(idx_re.size, bool)])
-    Vfull = mono.basis @ Vc
-    all_V = np.concatenate([Vfull[:, idx_up], np.conj(Vfull[:, idx_up]), Vfull[:, idx_re]], axis=1)
+    all_V = np.concatenate([x0[:, idx_up], np.conj(x0[:, idx_up]), x0[:, idx_re]], axis=1)
     Pm = P
     Pm *= np.exp(-1j * harm[None, None, :] * w0 * tm[:, None, None])
     # normalise: weighted RMS of p over the observed rows = 1, largest component real > 0
@@ -1183,10 +1254,10 @@ def floquet_analysis(dae: LinearPeriodicDAE, method: str = "radau", steps: Optio
     nrm[nrm == 0] = 1.0
     Pm /= nrm
     Po = Pm[:, obs_sel, :]
-    flat = np.abs(Po).reshape(-1, len(mus))
+    flat = np.abs(Po).reshape(-1, nm)
     jmax = np.argmax(flat, axis=0)
     mi, ri = np.unravel_index(jmax, Po.shape[:2])
-    big = Po[mi, ri, np.arange(len(mus))]
+    big = Po[mi, ri, np.arange(nm)]
     ph = np.where(np.abs(big) > 0, np.conj(big) / np.where(np.abs(big) > 0, np.abs(big), 1.0), 1.0)
     ph[nu:] = np.where(np.real(ph[nu:]) < 0, -1.0, 1.0)     # real eigenvectors stay real
     Pm *= ph[None, None, :]
@@ -1194,16 +1265,16 @@ def floquet_analysis(dae: LinearPeriodicDAE, method: str = "radau", steps: Optio
     Vn = all_V * np.concatenate([scale[:nu], np.conj(scale[:nu]), scale[nu:]])[None, :]
     absn = np.abs(all_eta)
     zeta = np.where(absn > 0, -all_eta.real / np.where(absn > 0, absn, 1.0), 0.0)
-    t2 = time.perf_counter()
+    t_end = time.perf_counter()
+    timings = dict(timings or {})
+    wall = t_end - start_time
+    if "monodromy" in timings:
+        timings["analysis"] = wall - timings["monodromy"]
     return FloquetResult(
         multipliers=all_lam, exponents=all_eta, exponents_principal=all_eta0,
         frequency_per_rev=all_eta.imag / w0, real_per_rev=all_eta.real / w0,
         frequency_hz=all_eta.imag / (2 * math.pi), damping_ratio=zeta, harmonic=all_h,
         harmonic_share=all_share, representative=rep, eigenvectors=Vn, sample_times=tm,
-        sample_rows=obs_rows, _p_unique=Pm, _n_upper=nu, omega=w0, period=T, method=method,
-        steps=mono.steps, fast=mono.fast, blades=nb, n_dynamic=d, wall_time=t2 - t0,
-        timings={"monodromy": t1 - t0, "analysis": t2 - t1,
-                 "factorizations": mono.factorizations, "lowrank": mono.lowrank,
-                 "coefficient_evaluations": getattr(mono.coefficients, "evaluations", None),
-                 "fourier_harmonics": getattr(mono.coefficients, "harmonics", None),
-                 "fourier_error": getattr(mono.coefficients, "error", None)})
+        sample_rows=np.asarray(sample_rows), _p_unique=Pm, _n_upper=nu, omega=w0, period=T,
+        method=method, steps=steps, fast=fast, blades=blades, n_dynamic=n_dynamic,
+        wall_time=wall, timings=timings, observed=obs_local, weights=w)

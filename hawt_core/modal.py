@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import json
 import time
+import warnings
 from dataclasses import dataclass, field
 from typing import Callable, Optional
 
@@ -36,12 +37,24 @@ from scipy.optimize import linear_sum_assignment
 
 from .assembly import TurbineModel
 from .blade_modes import FAMILIES, check_elements, classify_energy, deflate_infinite, equilibrate
-from .floquet import LinearPeriodicDAE, _dominant_harmonic, floquet_analysis
+from .floquet import LinearPeriodicDAE, _dominant_harmonic, floquet_analysis, periodic_modes
+from .hill import hill_modes
 from .model import Turbine
+from .multiblade import MultiBladeTransform, fixed_frame_modes
 from .periodic import periodic_steady_state
 
-METHODS = ("radau", "paper")
+#: "auto": multi-blade coordinates (Hill's method with constant coefficients, one
+#: eigenproblem) where they make the system time-invariant (3+ identical blades on a rigid
+#: hub, constant steady state), otherwise Radau IIA monodromy; "radau", "paper": monodromy
+#: by time marching; "hill": Hill's method (in multi-blade coordinates where the rotor's
+#: symmetry allows it, in the rotating frame otherwise)
+METHODS = ("auto", "radau", "paper", "hill")
 DEFAULT_STEPS = {"radau": 400, "paper": 1000}
+#: Largest frequency [per-rev] reported by Hill's method and multi-blade coordinates (the
+#: resolution of the default 400 Radau IIA steps, steps / 8).
+DEFAULT_MAX_PER_REV = 50.0
+#: Relative residual above which the blade-relabelling symmetry is taken not to hold.
+SYMMETRY_TOL = 1e-8
 #: Resolution limit: reported frequencies below steps / this (per-rev over a full period).
 STEPS_PER_CYCLE = {"radau": 8.0, "paper": 12.0}
 MAX_STEPS = 1_000_000
@@ -57,7 +70,15 @@ class Cancelled(RuntimeError):
 
 @dataclass
 class Mode:
-    """One Floquet mode. Frequencies are the dominant ones (paper's convention)."""
+    """One Floquet mode.  ``frequency_per_rev`` (and the other unprefixed fields) are the
+    dominant frequency of the motion that names the mode, the paper's convention: the
+    blades' deflection in the rotating frame for blade modes, the tower top or the yaw angle
+    (fixed frame) for tower and yaw modes.  With three or more blades the fixed-frame view
+    (multi-blade coordinates, as OpenFAST's MBC3 or HAWCStab2 report): ``fixed_frame_per_rev``
+    / ``fixed_frame_hz`` / ``fixed_frame_damping_ratio`` of the dominant fixed-frame harmonic,
+    ``whirl`` (collective, forward, backward, differential) and ``cyclic_order`` (k of the
+    dominant cyclic pair cos k psi, sin k psi; 0 collective, Nb/2 differential); None for
+    one- and two-bladed rotors."""
 
     family: str
     symmetry: Optional[str]
@@ -67,6 +88,11 @@ class Mode:
     frequency_hz: float
     damping_ratio: float
     blade_phase_deg: Optional[float] = None
+    fixed_frame_per_rev: Optional[float] = None
+    fixed_frame_hz: Optional[float] = None
+    fixed_frame_damping_ratio: Optional[float] = None
+    whirl: Optional[str] = None
+    cyclic_order: Optional[int] = None
     participation: dict = field(default_factory=dict, repr=False)
     column: int = field(default=-1, repr=False)
 
@@ -79,7 +105,11 @@ class Mode:
         return {"family": self.family, "symmetry": self.symmetry, "index": self.index,
                 "frequency_per_rev": self.frequency_per_rev, "real_per_rev": self.real_per_rev,
                 "frequency_hz": self.frequency_hz, "damping_ratio": self.damping_ratio,
-                "blade_phase_deg": self.blade_phase_deg}
+                "blade_phase_deg": self.blade_phase_deg,
+                "fixed_frame_per_rev": self.fixed_frame_per_rev,
+                "fixed_frame_hz": self.fixed_frame_hz,
+                "fixed_frame_damping_ratio": self.fixed_frame_damping_ratio,
+                "whirl": self.whirl, "cyclic_order": self.cyclic_order}
 
 
 @dataclass
@@ -110,13 +140,20 @@ class ModalResult:
 
     def table(self) -> str:
         s = self.settings
-        header = (f"Dominant frequencies of the turbine '{s['turbine']}' (Floquet, {s['method']}, "
-                  f"{s['steps']} steps/period{', fast Floquet' if s['fast'] else ''}), "
+        how = (f"{s['method']}, {s['steps']} steps/period{', fast Floquet' if s['fast'] else ''}"
+               if s["method"] in ("radau", "paper") else
+               f"Hill's method, {s.get('frame', 'rotating')} frame, "
+               f"{s.get('hill_harmonics', 0)} harmonics")
+        header = (f"Dominant frequencies of the turbine '{s['turbine']}' (Floquet, {how}), "
                   f"{s['elements']} elements per blade, rotor speed {s['rotor_speed']:.4g} rad/s")
         footer = []
         if self.unresolved:
-            footer.append(f"({self.unresolved} mesh modes above the temporal resolution "
-                          f"{s['resolution_per_rev']:.0f} per-rev not shown: raise --steps)")
+            if s["method"] in ("radau", "paper"):
+                footer.append(f"({self.unresolved} mesh modes above the temporal resolution "
+                              f"{s['resolution_per_rev']:.0f} per-rev not shown: raise --steps)")
+            else:
+                footer.append(f"({self.unresolved} modes above {s['resolution_per_rev']:.0f} "
+                              "per-rev not shown: raise --max-per-rev)")
         footer.append(f"computed in {self.compute_time:.2f} s")
         return format_table(header, self.modes, footer)
 
@@ -142,27 +179,61 @@ def _ordinal(k: int) -> str:
     return {1: "1st", 2: "2nd", 3: "3rd"}.get(k, f"{k}th")
 
 
+def mode_name(m) -> str:
+    """'1st antisymmetric flap', '1st backward-whirl lag', 'teeter', '1st side-side tower'."""
+    if m.family in ("yaw", "teeter"):
+        return m.family
+    return f"{_ordinal(m.index)} {(m.symmetry or '')} {m.family}".replace("  ", " ")
+
+
+def _eigenvalue_text(freq: float, real: float) -> str:
+    if abs(freq) < 5e-7 and abs(real) < 5e-7:
+        return "0"
+    if abs(freq) < 5e-7:
+        return f"{real:+.6f}"
+    return f"{real:+.6f} ± {freq:.6f} i"
+
+
+def _fixed(m):
+    """The fixed-frame fields of a mode (Mode or the hawt_msgs/Mode message), or None."""
+    f = getattr(m, "fixed_frame_per_rev", None)
+    return None if f is None or not np.isfinite(f) else f
+
+
 def format_table(header: str, modes, footer=()) -> str:
     """The modes as a table like the paper's Table 2. ``modes``: objects with the attributes
     family, symmetry, index, frequency_per_rev, real_per_rev, frequency_hz, damping_ratio
-    (Mode, or the hawt_msgs/Mode message of the ROS service)."""
-    lines = [header, f"{'mode':<30}{'eigenvalue (per-rev)':>28}{'Hz':>11}{'damping':>11}"]
+    (Mode, or the hawt_msgs/Mode message of the ROS service).  Three or more blades (modes
+    with fixed-frame fields): the fixed-frame eigenvalue, Hz and damping ratio, and the
+    rotating-frame dominant frequency beside them."""
+    fixed = bool(modes) and all(_fixed(m) is not None for m in modes)
+    if fixed:
+        lines = [header, f"{'mode':<30}{'fixed-frame eigenvalue (per-rev)':>34}{'Hz':>11}"
+                         f"{'damping':>11}{'rotating':>11}"]
+    else:
+        lines = [header, f"{'mode':<30}{'eigenvalue (per-rev)':>28}{'Hz':>11}{'damping':>11}"]
     for m in modes:
-        name = (f"{m.family}" if m.family in ("yaw", "teeter")
-                else f"{_ordinal(m.index)} {(m.symmetry or '')} {m.family}".replace("  ", " "))
-        if abs(m.frequency_per_rev) < 5e-7 and abs(m.real_per_rev) < 5e-7:
-            ev = "0"
-        elif abs(m.frequency_per_rev) < 5e-7:
-            ev = f"{m.real_per_rev:+.6f}"
-        else:
-            ev = f"{m.real_per_rev:+.6f} ± {m.frequency_per_rev:.6f} i"
+        name = mode_name(m)
+        if fixed:
+            ev = _eigenvalue_text(m.fixed_frame_per_rev, m.real_per_rev)
+            zeta = m.fixed_frame_damping_ratio
+            damping = f"{zeta:>11.2e}" if np.isfinite(zeta) else f"{'-':>11}"
+            lines.append(f"{name:<30}{ev:>34}{m.fixed_frame_hz:>11.5f}{damping}"
+                         f"{m.frequency_per_rev:>11.5f}")
+            continue
+        ev = _eigenvalue_text(m.frequency_per_rev, m.real_per_rev)
         damping = f"{m.damping_ratio:>11.2e}" if np.isfinite(m.damping_ratio) else f"{'-':>11}"
         lines.append(f"{name:<30}{ev:>28}{m.frequency_hz:>11.5f}{damping}")
     return "\n".join(lines + list(footer))
 
 
 # ---------------------------------------------------------------------------- validation
-def validate_request(elements=None, rotor_speed=None, steps=None, method=None):
+#: Largest accepted max_per_rev (Hill's method and multi-blade coordinates).
+MAX_PER_REV = 1000.0
+
+
+def validate_request(elements=None, rotor_speed=None, steps=None, method=None,
+                     max_per_rev=None):
     """Check analysis overrides; raises ValueError naming the field, value and what's allowed."""
     if elements is not None:
         if isinstance(elements, bool):      # check_elements would take True for 1
@@ -180,12 +251,24 @@ def validate_request(elements=None, rotor_speed=None, steps=None, method=None):
             raise ValueError(f"steps: {steps!r} is not allowed; need an integer from 8 to {MAX_STEPS}")
     if method is not None and method not in METHODS:
         raise ValueError(f"method: {method!r} is not allowed; choose one of {', '.join(METHODS)}")
+    if max_per_rev is not None:
+        try:
+            f = float(max_per_rev)
+        except (TypeError, ValueError):
+            f = float("nan")
+        if isinstance(max_per_rev, bool) or not (0 < f <= MAX_PER_REV):
+            raise ValueError(f"max_per_rev: {max_per_rev!r} is not allowed; need a number "
+                             f"> 0 and <= {MAX_PER_REV:g} [per-rev]")
 
 
 # ---------------------------------------------------------------------------- analysis
-def periodic_dae(model: TurbineModel, steady) -> LinearPeriodicDAE:
-    """The exact periodic linearization about ``steady`` as a LinearPeriodicDAE (with the
-    blade relabelling for Fast Floquet when the rotor allows it)."""
+def periodic_dae(model: TurbineModel, steady, check_symmetry: bool = True) -> LinearPeriodicDAE:
+    """The exact periodic linearization about ``steady`` as a LinearPeriodicDAE, with the
+    blade relabelling S for Fast Floquet and multi-blade coordinates when the rotor has the
+    symmetry (identical, equally spaced blades; a rigid hub or two blades on a teeter hinge).
+    With ``check_symmetry`` the identity ``E(t + T/Nb) = S E(t) S^T`` (and A) is verified at
+    two times; if it does not hold to SYMMETRY_TOL, S is dropped with a RuntimeWarning and
+    the full period is used (a wrong symmetry would give wrong exponents)."""
     cache = {}
 
     def jac(t):
@@ -203,8 +286,19 @@ def periodic_dae(model: TurbineModel, steady) -> LinearPeriodicDAE:
             S, nb = model.blade_relabelling(), model.n_blades
         except ValueError:
             S, nb = None, None
-    return LinearPeriodicDAE(lambda t: jac(t)[0], lambda t: jac(t)[1], model.period,
-                             model.differential, S=S, blades=nb)
+    dae = LinearPeriodicDAE(lambda t: jac(t)[0], lambda t: jac(t)[1], model.period,
+                            model.differential, S=S, blades=nb)
+    if S is not None and check_symmetry:
+        # times on the Fourier sampler's first grid (their linearizations are reused)
+        err = dae.check_symmetry(model.period * np.array([0.0, 0.2]))
+        dae.symmetry_error = err
+        if not err <= SYMMETRY_TOL:
+            warnings.warn(f"blade-relabelling symmetry: residual {err:.1e} > {SYMMETRY_TOL:.0e}"
+                          "; using the full period (no Fast Floquet, no multi-blade "
+                          "coordinates)", RuntimeWarning, stacklevel=2)
+            dae = LinearPeriodicDAE(dae.E, dae.A, model.period, model.differential)
+            dae.symmetry_error = err
+    return dae
 
 
 def dynamic_dimension(dae: LinearPeriodicDAE) -> int:
@@ -339,6 +433,74 @@ def label_modes(model: TurbineModel, fl, columns) -> list:
     return modes
 
 
+#: Exponents within this (relative) of each other form a degenerate cluster whose basis
+#: is re-chosen along the blade symmetry classes.
+CLUSTER_TOL = 1e-7
+
+
+def separate_degenerate_modes(model: TurbineModel, fl, columns, rows) -> int:
+    """Re-choose the basis of every cluster of equal exponents among ``columns`` so that each
+    vector belongs to one blade symmetry class (returns how many clusters were changed).
+
+    Equal exponents have an arbitrary basis: with four blades the collective and
+    differential torsion of a blade-local mode are exactly degenerate, and an eigen-solver
+    returns any mix of them, which the labels then misread (two "collective torsion" at one
+    frequency, none at the other).  The classes are the discrete Fourier components over
+    the blades (m = 0 collective, Nb/2 differential, the others cyclic): with the blade
+    vectors' components F_m (display rows, x(0)), the pure combinations c solve
+    ``W_m c = G c`` with eigenvalue 1 (``W_m = F_m^H F_m``, ``G = sum_m W_m``).  A cluster
+    is changed only if it splits completely into pure vectors (eigenvalue > 0.999)."""
+    nb = model.n_blades
+    if nb < 2 or len(columns) < 2:
+        return 0
+    lay = model.layout
+    pos = {int(r): j for j, r in enumerate(fl.sample_rows)}
+    blade_rows = [np.concatenate([lay.blade(k).u[1:].ravel(), lay.blade(k).theta[1:].ravel()])
+                  for k in range(nb)]
+    L = model.turbine.blade.length
+    w = np.concatenate([np.ones(lay.blade(0).u[1:].size), np.full(lay.blade(0).theta[1:].size, L)])
+    cols = sorted((int(c) for c in columns), key=lambda c: (fl.exponents[c].imag,
+                                                              fl.exponents[c].real))
+    omega = fl.omega
+    clusters, cur = [], [cols[0]]
+    for c in cols[1:]:
+        a, b = fl.exponents[cur[-1]], fl.exponents[c]
+        if abs(a - b) <= CLUSTER_TOL * max(abs(a), omega):
+            cur.append(c)
+        else:
+            clusters.append(cur)
+            cur = [c]
+    clusters.append(cur)
+    nu = fl._n_upper
+    changed = 0
+    phase = np.exp(-2j * np.pi * np.outer(np.arange(nb), np.arange(nb)) / nb)   # (m, b)
+    for cl in clusters:
+        if len(cl) < 2:
+            continue
+        kinds = {0 if c < nu else 1 if c < 2 * nu else 2 for c in cl}
+        if len(kinds) != 1 or 2 in kinds:
+            continue                                # real exponents: leave them
+        X = fl.eigenvectors
+        B = np.array([X[br][:, cl] * w[:, None] for br in blade_rows])     # (Nb, rows, c)
+        F = np.einsum("mb,brc->mrc", phase, B) / nb                          # (m, rows, c)
+        Wm = np.einsum("mrc,mrd->mcd", np.conj(F), F)
+        G = Wm.sum(0)
+        if np.linalg.cond(G) > 1e12:
+            continue
+        Q, found = [], 0
+        for m in range(nb):
+            ev, vec = sl.eigh(Wm[m], G)
+            sel = ev > 0.999
+            Q.append(vec[:, sel])
+            found += int(sel.sum())
+        if found != len(cl):
+            continue
+        Q = np.concatenate(Q, axis=1)
+        fl.recombine(cl, Q)
+        changed += 1
+    return changed
+
+
 def _exponent_fields(eta: complex, w0: float) -> dict:
     """Mode fields frequency_per_rev, real_per_rev, frequency_hz and damping_ratio of the
     characteristic exponent ``eta`` [rad/s] at the rotor speed ``w0``."""
@@ -412,47 +574,16 @@ def _index(modes):
     return modes
 
 
-def modal_analysis(turbine: Turbine, elements: Optional[int] = None,
-                   rotor_speed: Optional[float] = None, steps: Optional[int] = None,
-                   method: Optional[str] = None, fast: Optional[bool] = None,
-                   harmonics: int = 8,
-                   progress: Optional[Callable[[float, str], None]] = None,
-                   cancel: Optional[Callable[[], bool]] = None) -> ModalResult:
-    """Floquet modal analysis of ``turbine``; overrides for elements, rotor speed [rad/s],
-    marching steps per period and method ('radau' default, 'paper'). ``progress(fraction,
-    message)`` is called between stages; ``cancel()`` returning True raises Cancelled."""
-    method = method or "radau"
-    validate_request(elements, rotor_speed, steps, method)
-    steps = int(steps) if steps is not None else DEFAULT_STEPS[method]
-    t0 = time.perf_counter()
-    timings = {}
-
-    def stage(frac, msg):
-        if cancel is not None and cancel():
-            raise Cancelled(f"modal analysis cancelled during: {msg}")
-        if progress is not None:
-            progress(frac, msg)
-
-    stage(0.0, "building the model")
-    model = TurbineModel(turbine, elements=elements, rotor_speed=rotor_speed)
-    stage(0.05, "steady state")
-    steady = periodic_steady_state(model, harmonics=harmonics)
-    timings["steady_state"] = time.perf_counter() - t0
-    stage(0.2, "linearization")
-    dae = periodic_dae(model, steady)
-    use_fast = dae.S is not None if fast is None else (bool(fast) and dae.S is not None)
-    stage(0.3, f"monodromy ({method}, {steps} steps)")
-    t1 = time.perf_counter()
-    rows, wts = _display_rows(model)
-    # the dominant harmonic is judged on displacement-like rows weighted to tip metres
-    d = dynamic_dimension(dae)
+def _monodromy_modes(model: TurbineModel, dae: LinearPeriodicDAE, method: str, steps: int,
+                     use_fast: bool, rows, wts, d: int):
+    """Floquet by time marching (Radau IIA or the paper's central differencing): the
+    FloquetResult, the labelled resolved modes, the count of unresolved ones and the
+    resolution limit [per-rev]."""
     # samples of the periodic eigenvectors per period: the dominant harmonic is resolved up
     # to samples / 2 per-rev, so the reported band is also capped at samples / 2.5
     samples = int(min(MAX_SAMPLES, max(128, 2 ** np.ceil(np.log2(2.5 * steps / STEPS_PER_CYCLE[method])))))
     fl = floquet_analysis(dae, method=method, steps=steps, fast=use_fast, samples=samples,
                           observed=rows, weights=wts ** 2, dynamic_dim=d)
-    timings["floquet"] = time.perf_counter() - t1
-    stage(0.85, "labelling modes")
     omega = model.rotor_speed
     limit = min(steps / STEPS_PER_CYCLE[method], samples / 2.5)
     lam0, X0 = _averaged_modes(dae, rows, wts)
@@ -498,13 +629,153 @@ def modal_analysis(turbine: Turbine, elements: Optional[int] = None,
                 setattr(m, name, value)
             m.column = int(a)
     else:
+        separate_degenerate_modes(model, fl, resolved, rows)
         modes = label_modes(model, fl, resolved)
-    modes.sort(key=lambda m: (m.frequency_per_rev, m.real_per_rev))
+    return fl, modes, unresolved, limit
+
+
+def _hill_floquet(model: TurbineModel, dae: LinearPeriodicDAE, transform, max_per_rev: float,
+                  rows, wts, d: int):
+    """Floquet modes by Hill's method (hawt_core.hill) on ``dae``: the rotating-frame system,
+    or with ``transform`` (a MultiBladeTransform) the system in multi-blade coordinates
+    (constant for an isotropic rotor without gravity: one eigenproblem).  Returns the
+    rotating-frame FloquetResult (samples x(t) = T(t) q(t) e^{eta t} over a revolution, so that
+    labels, shapes and Campbell tracking work as for the marching) and the HillModes."""
+    omega = model.rotor_speed
+    srows = np.unique(rows)
+    pos = {int(r): i for i, r in enumerate(srows)}
+    obs = np.array([pos[int(r)] for r in rows])
+    frame_rows = rows
+    hm = hill_modes(dae, max_per_rev * omega, observed=frame_rows, weights=wts ** 2)
+    T = model.period
+    M = int(min(MAX_SAMPLES, max(128, 2 ** np.ceil(np.log2(2.5 * max_per_rev)))))
+    tm = np.arange(M) * T / M
+    lam = hm.exponents
+    tol = 1e-7 * omega
+    upper = [i for i in range(lam.size) if lam[i].imag > tol]
+    real = [i for i in range(lam.size) if abs(lam[i].imag) <= tol]
+    order = upper + real
+    groups = transform.blade_groups(srows) if transform is not None else None
+    X = np.empty((M, srows.size, len(order)), complex)
+    x0 = np.empty((model.n, len(order)), complex)
+    eta0 = np.empty(len(order), complex)
+    T0 = transform.matrix(0.0) if transform is not None else None
+    for j, i in enumerate(order):
+        q = hm.periodic(i, tm, srows)                              # (M, rows), dae frame
+        q0 = hm.vectors[:, :, i].sum(axis=0)                       # (n,) at t = 0
+        x = transform.to_rotating(q, tm, groups) if transform is not None else q
+        xf = T0 @ q0 if transform is not None else q0
+        eta = lam[i]
+        if j >= len(upper):            # real exponent: a real solution (fix the phase)
+            eta = complex(eta.real, 0.0)
+            k = int(np.argmax(np.abs(xf)))
+            ph = np.conj(xf[k]) / abs(xf[k]) if abs(xf[k]) > 0 else 1.0
+            x, xf = np.real(x * ph), np.real(xf * ph)
+        X[:, :, j] = x * np.exp(eta * tm)[:, None]
+        x0[:, j] = xf
+        eta0[j] = eta
+    fl = periodic_modes(eta0, X, x0, len(upper), period=T, sample_rows=srows, observed=obs,
+                        weights=wts ** 2, method="hill", steps=0, fast=False, blades=1,
+                        n_dynamic=d, timings=dict(hm.timings))
+    return fl, hm
+
+
+_WHIRL_SYMMETRY = {"collective": "collective", "forward": "forward-whirl",
+                   "backward": "backward-whirl", "differential": "differential"}
+
+
+def _add_fixed_frame(transform, fl, modes, rows, wts):
+    """Fixed-frame fields of every mode (three or more blades); the blade modes' symmetry
+    becomes their whirl: collective, backward-whirl, forward-whirl (-k for the k-th cyclic
+    pair, k >= 2), differential."""
+    ff = fixed_frame_modes(transform, fl, [m.column for m in modes], rows, wts)
+    for m in modes:
+        f = ff[m.column]
+        x = _exponent_fields(f.exponent, fl.omega)
+        m.fixed_frame_per_rev = x["frequency_per_rev"]
+        m.fixed_frame_hz = x["frequency_hz"]
+        m.fixed_frame_damping_ratio = x["damping_ratio"]
+        m.whirl = f.whirl
+        m.cyclic_order = f.order
+        if m.family not in ("yaw", "teeter", "tower"):
+            sym = _WHIRL_SYMMETRY[f.whirl]
+            if f.whirl in ("forward", "backward") and f.order > 1:
+                sym = f"{sym}-{f.order}"
+            m.symmetry = sym
+
+
+def modal_analysis(turbine: Turbine, elements: Optional[int] = None,
+                   rotor_speed: Optional[float] = None, steps: Optional[int] = None,
+                   method: Optional[str] = None, fast: Optional[bool] = None,
+                   harmonics: int = 8, max_per_rev: Optional[float] = None,
+                   progress: Optional[Callable[[float, str], None]] = None,
+                   cancel: Optional[Callable[[], bool]] = None) -> ModalResult:
+    """Floquet modal analysis of ``turbine``; overrides for elements, rotor speed [rad/s],
+    marching steps per period, method (METHODS; default "auto": multi-blade coordinates where
+    they make the system time-invariant, otherwise Radau IIA) and ``max_per_rev`` (the band
+    of Hill's method / multi-blade coordinates, default DEFAULT_MAX_PER_REV).  ``harmonics``:
+    of the periodic steady state.  Three or more blades: every mode also carries its
+    fixed-frame frequency and whirl.  ``progress(fraction, message)`` is called between
+    stages; ``cancel()`` returning True raises Cancelled."""
+    method = method or "auto"
+    validate_request(elements, rotor_speed, steps, method, max_per_rev)
+    t0 = time.perf_counter()
+    timings = {}
+
+    def stage(frac, msg):
+        if cancel is not None and cancel():
+            raise Cancelled(f"modal analysis cancelled during: {msg}")
+        if progress is not None:
+            progress(frac, msg)
+
+    stage(0.0, "building the model")
+    model = TurbineModel(turbine, elements=elements, rotor_speed=rotor_speed)
+    stage(0.05, "steady state")
+    steady = periodic_steady_state(model, harmonics=harmonics)
+    timings["steady_state"] = time.perf_counter() - t0
+    stage(0.2, "linearization")
+    dae = periodic_dae(model, steady)
+    transform = MultiBladeTransform(model) if model.n_blades >= 3 else None
+    mbc = transform.dae(dae) if transform is not None and dae.S is not None else None
+    if method == "auto":
+        method = "hill" if mbc is not None and steady.constant else "radau"
+    use_fast = dae.S is not None if fast is None else (bool(fast) and dae.S is not None)
+    rows, wts = _display_rows(model)
+    # the dominant harmonic is judged on displacement-like rows weighted to tip metres
+    d = model.dynamic_dimension()
+    t1 = time.perf_counter()
+    omega = model.rotor_speed
+    extra = {}
+    if method in ("radau", "paper"):
+        steps = int(steps) if steps is not None else DEFAULT_STEPS[method]
+        stage(0.3, f"monodromy ({method}, {steps} steps)")
+        fl, modes, unresolved, limit = _monodromy_modes(model, dae, method, steps, use_fast,
+                                                        rows, wts, d)
+    else:
+        limit = float(max_per_rev) if max_per_rev is not None else DEFAULT_MAX_PER_REV
+        frame = "multi-blade" if mbc is not None else "rotating"
+        stage(0.3, f"Hill's method ({frame} frame, modes below {limit:g} per-rev)")
+        fl, hm = _hill_floquet(model, mbc if mbc is not None else dae,
+                               transform if mbc is not None else None, limit, rows, wts, d)
+        use_fast, steps = False, None
+        separate_degenerate_modes(model, fl, fl.modes(), rows)
+        modes = label_modes(model, fl, fl.modes())
+        unresolved = max(0, d - int(fl.exponents.size))     # above the band
+        extra = {"frame": frame, "hill_harmonics": hm.harmonics,
+                 "hill_size": hm.size, "coefficient_harmonics": hm.coefficient_harmonics}
+    timings["floquet"] = time.perf_counter() - t1
+    stage(0.85, "labelling modes")
+    if transform is not None:
+        _add_fixed_frame(transform, fl, modes, rows, wts)
+        modes.sort(key=lambda m: (m.fixed_frame_per_rev, m.real_per_rev))
+    else:
+        modes.sort(key=lambda m: (m.frequency_per_rev, m.real_per_rev))
     _index(modes)
     settings = {"turbine": turbine.name, "elements": model.beam.N, "rotor_speed": omega,
-                "method": method, "steps": steps, "fast": bool(use_fast), "blades": model.n_blades,
-                "resolution_per_rev": limit, "steady_state": "constant" if steady.constant
-                else f"periodic ({harmonics} harmonics)"}
+                "method": method, "steps": steps, "fast": bool(use_fast),
+                "blades": model.n_blades, "resolution_per_rev": limit,
+                "steady_state": "constant" if steady.constant
+                else f"periodic ({harmonics} harmonics)", **extra}
     total = time.perf_counter() - t0
     timings["total"] = total
     stage(1.0, "done")

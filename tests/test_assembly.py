@@ -81,21 +81,46 @@ def test_structured_jacobians_equal_plain_complex_step(turbine):
             np.testing.assert_allclose(Jd[:, j].toarray().ravel(), fd, atol=1e-6 * scale)
 
 
-@pytest.mark.parametrize("turbine", [VARIANTS[0],
-                                     pytest.param(soft_tower_turbine(), id="soft-tower")])
+def _n_blade_variants():
+    """Rotors with 3, 4, 5 blades on a rigid hub, free yaw, with gravity, tilt, precone,
+    undersling and springs; and three blades on the soft flexible tower."""
+    T = load_turbine()
+    for nb in (3, 4, 5):
+        yield f"{nb}-blades-gravity-tilt", dc.replace(
+            T, rotor=dc.replace(T.rotor, blades=nb, precone=0.05), gravity=Gravity(True, 9.81),
+            hub=dc.replace(T.hub, teeter=False, undersling=0.2, mass=300.0),
+            nacelle=dc.replace(T.nacelle, shaft_tilt=0.1, yaw_stiffness=1e5, yaw_damping=1e3))
+    st = soft_tower_turbine()
+    yield "3-blades-soft-tower-gravity", dc.replace(
+        st, rotor=dc.replace(st.rotor, blades=3), hub=dc.replace(st.hub, teeter=False),
+        gravity=Gravity(True, 9.81))
+
+
+SYMMETRY_VARIANTS = ([VARIANTS[0], pytest.param(soft_tower_turbine(), id="soft-tower")]
+                     + [pytest.param(t, id=name) for name, t in _n_blade_variants()])
+
+
+@pytest.mark.parametrize("turbine", SYMMETRY_VARIANTS)
 def test_blade_relabelling_symmetry_of_the_equations(turbine):
-    """R(S ydot, S y, t + T/2) = S_rows R(ydot, y, t) for the two-bladed teetering rotor, with
-    S the blade relabelling (teeter sign flip) and S_rows the same map on the equations
-    (the teeter rows change sign too): the identity behind Fast Floquet, to round-off (1e-9).
-    On the paper's turbine and on the paper's rotor on a soft flexible tower (the relabelling
-    maps the tower to itself)."""
+    """R(S ydot, S y, t + T/Nb) = S_rows R(ydot, y, t), with S the blade relabelling (blade
+    k+1's unknowns in blade k's slot; for two blades the teeter sign flips) and S_rows the
+    same map on the equations: the identity behind Fast Floquet and the multi-blade
+    transform, to round-off (1e-9), for the paper's turbine, its rotor on a soft flexible
+    tower, and 3, 4, 5 blades with free yaw, gravity, tilt and precone.  With three or more
+    blades the opposite direction (S^T) must violate it by more than 1e-6: the check can
+    tell the directions apart."""
     m = TurbineModel(turbine, elements=3)
     S = m.blade_relabelling()
     yd, y = _random_state(m, 7)
     t = 0.21
-    lhs = m.residual(S @ yd, S @ y, t + m.period / 2)
+    tau = m.period / m.n_blades
+    lhs = m.residual(S @ yd, S @ y, t + tau)
     rhs = S @ m.residual(yd, y, t)
     np.testing.assert_allclose(lhs, rhs, atol=1e-9 * np.abs(rhs).max())
+    if m.n_blades >= 3:
+        St = S.T.tocsr()
+        wrong = m.residual(St @ yd, St @ y, t + tau) - St @ m.residual(yd, y, t)
+        assert np.abs(wrong).max() > 1e-6 * np.abs(rhs).max()
 
 
 def test_layout_names_and_indices():

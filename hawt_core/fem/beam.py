@@ -301,6 +301,13 @@ class BeamElements:
         return out
 
     # ------------------------------------------------------------------ helpers
+    def dynamic_dimension(self) -> int:
+        """Dynamic states of one clamped beam: 2 per flexible section direction and element
+        (a direction with zero compliance is a constraint whose section load is a Lagrange
+        multiplier): 6N with rigid axial and shear directions, 12N with all six flexible."""
+        flexible = np.any(self.R != 0, axis=2).sum()       # nonzero compliance rows
+        return int(2 * flexible)
+
     def pattern_blocks(self):
         """Block sizes of the unknowns (root block, then N element blocks)."""
         return [ROOT_SIZE] + [BLOCK_SIZE] * self.N
