@@ -311,10 +311,18 @@ def dynamic_dimension(dae: LinearPeriodicDAE) -> int:
 
 
 def _display_rows(model: TurbineModel):
-    """Indices and weights of displacement-like unknowns (units: metres at the blade tip)."""
+    """Indices and weights of displacement-like unknowns (units: metres of motion): rigid
+    rotations times the rotor radius; blade displacements; blade bending slopes (theta2,
+    theta3) times the blade length (the tip metres they cause); the twist theta1 times the
+    sections' torsional radius of gyration sqrt(i1 / m) (the metres its mass moves: a twist
+    times the blade length would outweigh a flap deflection by the span-to-chord ratio, and
+    a torsion sideband would then name a flap mode's frequency); the tower's displacements
+    and its rotations times the rotor radius."""
     lay = model.layout
     R = model.turbine.hub.radius + model.turbine.blade.length
     L = model.turbine.blade.length
+    sec = model.turbine.blade.sections
+    r_g = float(np.sqrt(np.mean(sec.i1) / np.mean(sec.mass)))
     idx, wts = [], []
     for name in ("yaw", "teeter"):
         if name in lay:
@@ -323,7 +331,7 @@ def _display_rows(model: TurbineModel):
         b = lay.blade(k)
         u, th = b.u[1:].ravel(), b.theta[1:].ravel()
         idx += u.tolist() + th.tolist()
-        wts += [1.0] * len(u) + [L] * len(th)
+        wts += [1.0] * len(u) + [r_g, L, L] * (len(th) // 3)
     if lay.has_tower:   # tower displacements [m] and rotations (rotor radius: tip metres)
         tl = lay.tower()
         u, th = tl.u[1:].ravel(), tl.theta[1:].ravel()
@@ -389,7 +397,6 @@ def label_modes(model: TurbineModel, fl, columns) -> list:
                  for nm in ("yaw", "teeter") if nm in lay}
         elastic = 0.0
         energy = np.zeros(6)
-        bvecs = []
         for k in range(nb):
             b = lay.blade(k)
             u = x[b.u[1:]]
@@ -397,7 +404,6 @@ def label_modes(model: TurbineModel, fl, columns) -> list:
             elastic = max(elastic, np.abs(u).max(), r_g * np.abs(th[:, 0]).max())
             off = lay.blade_offset(k)
             energy += classify_energy(model.beam, x[off:off + model.beam.n])
-            bvecs.append(np.concatenate([u.ravel(), model.turbine.blade.length * th.ravel()]))
         tower, tower_dir = _tower_motion(model, x) if lay.has_tower else (0.0, None)
         rig_name = None
         if tower > 0 and tower >= max([elastic] + [0.25 * r for r in rigid.values()]):
@@ -418,8 +424,9 @@ def label_modes(model: TurbineModel, fl, columns) -> list:
             family, symmetry, phase = rig_name, None, None
         else:
             family = FAMILIES[int(np.argmax(energy))]
-            symmetry, phase = _blade_symmetry(bvecs)
         eta = _family_exponent(model, fl, i, family)
+        if rig_name is None:
+            symmetry, phase = _blade_symmetry(model, fl, i, eta)
         modes.append(Mode(family=family, symmetry=symmetry, index=0,
                           **_exponent_fields(eta, fl.omega),
                           blade_phase_deg=phase,
@@ -510,29 +517,54 @@ def _exponent_fields(eta: complex, w0: float) -> dict:
             "damping_ratio": float(-eta.real / abs(eta)) if abs(eta) > 1e-6 * w0 else 0.0}
 
 
+#: Blade unknowns whose motion names an elastic family: (field, component, weight), the
+#: weight "L" standing for the blade length (a slope's tip metres), "r_g" for the sections'
+#: torsional radius of gyration (a twist's metres of mass motion).
+FAMILY_ROWS = {"flap": (("u", 2, 1.0), ("theta", 1, "L")),
+               "lag": (("u", 1, 1.0), ("theta", 2, "L")),
+               "torsion": (("theta", 0, "r_g"),),
+               "axial": (("u", 0, 1.0),),
+               "shear": (("u", 1, 1.0), ("u", 2, 1.0))}
+
+
+def _family_rows(model: TurbineModel, family: str, blade: Optional[int] = None):
+    """(rows, weights) of the motion that names ``family``: the yaw or teeter angle, the
+    tower top (displacements, rotations times the rotor radius), or the blades' FAMILY_ROWS
+    (all blades, or one)."""
+    lay = model.layout
+    R = model.turbine.hub.radius + model.turbine.blade.length
+    if family in ("yaw", "teeter"):
+        return ([lay[family]], [1.0]) if family in lay else ([], [])
+    if family == "tower":
+        tl = lay.tower()
+        return (list(tl.u[-1]) + list(tl.theta[-1]), [1.0] * 3 + [R] * 3)
+    sec = model.turbine.blade.sections
+    scale = {"L": model.turbine.blade.length,
+             "r_g": float(np.sqrt(np.mean(sec.i1) / np.mean(sec.mass)))}
+    rows, wts = [], []
+    for k in (range(model.n_blades) if blade is None else [blade]):
+        b = lay.blade(k)
+        for field_name, comp, w in FAMILY_ROWS[family]:
+            r = getattr(b, field_name)[1:, comp]
+            rows += r.tolist()
+            wts += [scale.get(w, w)] * len(r)
+    return rows, wts
+
+
 def _family_exponent(model: TurbineModel, fl, i: int, family: str) -> complex:
     """Characteristic exponent of mode ``i`` with the integer-per-rev ambiguity resolved by the
-    dominant harmonic of the motion that names the mode: the teeter angle for teeter modes,
-    the yaw angle for yaw modes, the blade deflections otherwise (ties: the non-negative
-    frequency closest to zero)."""
-    lay = model.layout
+    dominant harmonic of the motion that names the mode (the paper's convention): the teeter
+    angle for teeter modes, the yaw angle for yaw modes, the tower top for tower modes, the
+    blades' flap (u3 and the slope theta2), lag (u2, theta3), twist (theta1), ... motion for
+    blade modes (ties: the non-negative frequency closest to zero).  With periodic
+    coefficients a mode's vector has several harmonics, and a sideband of another family's
+    motion (a torsion sideband of a flap mode) must not name its frequency."""
     pos = {int(r): j for j, r in enumerate(fl.sample_rows)}
-    wts = None
-    if family in ("yaw", "teeter"):
-        rows = [pos[lay[family]]] if lay[family] in pos else []
-    elif family == "tower":
-        tl = lay.tower()
-        R = model.turbine.hub.radius + model.turbine.blade.length
-        sel = [(int(r), 1.0) for r in tl.u[-1]] + [(int(r), R) for r in tl.theta[-1]]
-        rows = [pos[r] for r, _ in sel if r in pos]
-        wts = np.array([w for r, w in sel if r in pos])
-    else:
+    rows, wts = _family_rows(model, family)
+    sel = [(pos[int(r)], w) for r, w in zip(rows, wts) if int(r) in pos]
+    if not sel:
         return _nonnegative(complex(fl.exponents[i]))
-    if not rows:
-        return _nonnegative(complex(fl.exponents[i]))
-    P = fl.periodic_sample(i)[:, rows]
-    if wts is not None:
-        P = P * wts[None, :]
+    P = fl.periodic_sample(i)[:, [j for j, _ in sel]] * np.array([w for _, w in sel])[None, :]
     M = P.shape[0]
     energy = (np.abs(np.fft.fft(P, axis=0) / M) ** 2).sum(1)
     k = np.fft.fftfreq(M, 1.0 / M).astype(int)
@@ -547,13 +579,49 @@ def _nonnegative(eta: complex) -> complex:
     return eta.conjugate() if eta.imag < 0 else eta
 
 
-def _blade_symmetry(bvecs):
-    """Symmetry of the blade motions in their own frames; (label, blade-to-blade phase deg)."""
-    nb = len(bvecs)
+def _blade_symmetry(model: TurbineModel, fl, i: int, eta: complex):
+    """Symmetry of the blade motions of mode ``i`` reported with the exponent ``eta``;
+    (label, blade-to-blade phase [deg]).
+
+    Blade k reaches at t + T/Nb the azimuth where blade k+1 was at t; with the periodic part
+    p of the reported exponent the blades relate by ``p_k(t + T/Nb) = e^{i phase}
+    p_{k+1}(t)`` (exactly for a rotor with the relabelling symmetry, in the least-squares
+    sense otherwise; shifts of p by Fourier interpolation).  Phase 0: symmetric (two blades)
+    or collective; 180 deg: antisymmetric or differential; other multiples of 360/Nb:
+    cyclic.  Reporting a frequency one whole per-rev off turns the phase by 360/Nb, which is
+    why the symmetry follows the reported exponent (with periodic coefficients the dominant
+    harmonic can differ from the marching's principal one)."""
+    nb = model.n_blades
     if nb < 2:
         return None, None
-    b0, b1 = bvecs[0], bvecs[1]
-    z = np.vdot(b0, b1)
+    pos = {int(r): j for j, r in enumerate(fl.sample_rows)}
+    lay = model.layout
+    blades = []
+    for k in range(nb):
+        b = lay.blade(k)
+        r = np.concatenate([b.u[1:].ravel(), b.theta[1:].ravel()])
+        if any(int(x) not in pos for x in r):
+            return None, None
+        blades.append([pos[int(x)] for x in r])
+    L = model.turbine.blade.length
+    w = np.concatenate([np.ones(lay.blade(0).u[1:].size), np.full(lay.blade(0).theta[1:].size, L)])
+    P = fl.periodic_sample(i)
+    eta0 = complex(fl.exponents[i])
+    flip = eta.imag * eta0.imag < 0 or (eta.imag == 0 and eta0.imag != 0 and
+                                       abs(eta - eta0.conjugate()) < abs(eta - eta0))
+    if flip:                        # eta is the conjugate member's exponent
+        P, eta0 = np.conj(P), eta0.conjugate()
+    M = P.shape[0]
+    t = fl.sample_times
+    dk = int(round((eta.imag - eta0.imag) / fl.omega))
+    C = np.fft.fft(P * np.exp(-1j * dk * fl.omega * t)[:, None], axis=0) / M   # harmonics of p
+    kk = np.fft.fftfreq(M, 1.0 / M)
+    shift = np.exp(1j * kk * 2 * np.pi / nb)[:, None]                       # t -> t + T/Nb
+    z = 0j
+    for k in range(nb):
+        a = C[:, blades[k]] * w[None, :] * shift
+        b_ = C[:, blades[(k + 1) % nb]] * w[None, :]
+        z += np.vdot(b_, a)
     phase = float(np.degrees(np.angle(z))) if abs(z) > 0 else 0.0
     step = round(phase / (360.0 / nb)) % nb
     if nb == 2:
@@ -684,11 +752,20 @@ _WHIRL_SYMMETRY = {"collective": "collective", "forward": "forward-whirl",
                    "backward": "backward-whirl", "differential": "differential"}
 
 
-def _add_fixed_frame(transform, fl, modes, rows, wts):
+def _add_fixed_frame(model, transform, fl, modes, rows, wts):
     """Fixed-frame fields of every mode (three or more blades); the blade modes' symmetry
     becomes their whirl: collective, backward-whirl, forward-whirl (-k for the k-th cyclic
-    pair, k >= 2), differential."""
-    ff = fixed_frame_modes(transform, fl, [m.column for m in modes], rows, wts)
+    pair, k >= 2), differential.  The frequency and the whirl of a blade mode come from the
+    motion that names it (as its rotating-frame frequency does: hawt_core.modal
+    FAMILY_ROWS), the whirl of a yaw, teeter or tower mode from all blade motion."""
+    blade_rows = [(r, w) for r, w in zip(rows, wts) if r >= model.layout.blade_offset(0)
+                  and r < model.layout.blade_offset(0) + model.n_blades * model.beam.n]
+    br, bw = [r for r, _ in blade_rows], [w for _, w in blade_rows]
+    specs = {}
+    for m in modes:
+        fr, fw = _family_rows(model, m.family)
+        specs[m.column] = (fr, fw, fr, fw) if m.family in FAMILY_ROWS else (fr, fw, br, bw)
+    ff = fixed_frame_modes(transform, fl, specs)
     for m in modes:
         f = ff[m.column]
         x = _exponent_fields(f.exponent, fl.omega)
@@ -766,7 +843,7 @@ def modal_analysis(turbine: Turbine, elements: Optional[int] = None,
     timings["floquet"] = time.perf_counter() - t1
     stage(0.85, "labelling modes")
     if transform is not None:
-        _add_fixed_frame(transform, fl, modes, rows, wts)
+        _add_fixed_frame(model, transform, fl, modes, rows, wts)
         modes.sort(key=lambda m: (m.fixed_frame_per_rev, m.real_per_rev))
     else:
         modes.sort(key=lambda m: (m.frequency_per_rev, m.real_per_rev))

@@ -217,50 +217,53 @@ class FixedFrameMode:
     shares: dict
 
 
-def fixed_frame_modes(transform: MultiBladeTransform, fl, columns, rows, weights) -> dict:
-    """{column: FixedFrameMode} for the modes ``columns`` of a FloquetResult ``fl`` (rotating
-    frame; any method).  ``rows``, ``weights``: the display rows (tip metres) and their
-    weights; they must contain every blade's copy of each blade row used.
+def fixed_frame_modes(transform: MultiBladeTransform, fl, specs: dict) -> dict:
+    """{column: FixedFrameMode} for modes of a FloquetResult ``fl`` (rotating frame; any
+    method).  ``specs``: {column: (rows, weights, whirl_rows, whirl_weights)}: the rows (and
+    weights, metres of motion) whose dominant fixed-frame harmonic gives the frequency, and
+    those whose blade part gives the whirl; blade rows must come with every blade's copy.
 
     The periodic eigenvector p(t) (rotating frame) becomes ``q(t) = C(t)^-1 p(t)`` in
     multi-blade coordinates, ``x = q(t) e^{eta t}``; the dominant harmonic k of q (weighted:
     per-blade energies, the cyclic coordinates at half weight) gives the fixed-frame exponent
     ``eta + i k Omega0``, and the mean of ``q(t) e^{-i k Omega0 t}`` the fixed-frame amplitudes
-    whose blade part gives the whirl."""
+    whose blade part gives the whirl (per-blade energies of the collective, forward,
+    backward and differential parts; the largest names it)."""
     from .floquet import _dominant_harmonic
     pos = {int(r): j for j, r in enumerate(fl.sample_rows)}
-    rows = np.asarray(rows, int)
-    weights = np.asarray(weights, float)
-    sel = np.array([pos[int(r)] for r in rows])
-    groups = transform.blade_groups(rows)
-    if groups is None:
-        raise ValueError("fixed-frame modes: the display rows lack some blade's copy")
     nb = transform.blades
-    names = transform.names
     orders = transform.orders
-    # per-blade energy weights of the coordinates (cos/sin pairs at 1/2) on the grouped rows
-    wz = weights.copy() ** 2
     coord_w = np.where(orders == 0, 1.0, 0.5)
     if nb % 2 == 0:
         coord_w[-1] = 1.0
-    for j in range(nb):
-        wz[groups[:, j]] *= coord_w[j]
     times = fl.sample_times
     M = len(times)
     kk = np.fft.fftfreq(M, 1.0 / M).astype(int)
     w0 = fl.omega
     out = {}
-    for c in columns:
+    for c, (rows, weights, wrows, wweights) in specs.items():
+        rows = list(rows) + [r for r in wrows if r not in set(rows)]
+        wmap = dict(zip(map(int, wrows), wweights))
+        fmap = dict(zip(map(int, specs[c][0]), specs[c][1]))
+        rows = np.array(rows, int)
+        sel = np.array([pos[int(r)] for r in rows])
+        groups = transform.blade_groups(rows)
+        if groups is None:
+            raise ValueError("fixed-frame modes: the rows lack some blade's copy")
         P = fl.periodic_sample(int(c))[:, sel]                  # (M, rows)
         Q = transform.to_fixed(P, times, groups)
         C = np.fft.fft(Q, axis=0) / M
-        energy = (np.abs(C) ** 2) @ wz
+        wf = np.array([fmap.get(int(r), 0.0) for r in rows]) ** 2
+        for j in range(nb):
+            wf[groups[:, j]] *= coord_w[j]
+        energy = (np.abs(C) ** 2) @ wf
         eta = complex(fl.exponents[int(c)])
         k = kk[_dominant_harmonic(energy, kk, eta.imag, w0, tie=1e-9)]
         eta_f = eta + 1j * k * w0
         amp = C[k % M]                                          # fixed-frame amplitudes
+        ww = np.array([wmap.get(int(r), 0.0) for r in rows]) ** 2
+        gw = ww[groups[:, 0]]
         blade = amp[groups]                                     # (G, Nb): coordinate j
-        gw = weights[groups[:, 0]] ** 2
         e = {"collective": float(gw @ np.abs(blade[:, 0]) ** 2)}
         fw = np.zeros(len(orders))
         bw = np.zeros(len(orders))
