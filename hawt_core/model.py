@@ -127,7 +127,10 @@ class Hub:
     of the paper's Eq. 11). ``teeter`` False makes the hub rigid on the shaft.
     ``inertia_lateral`` (Ihlat, about h1 and h2) and ``inertia_longitudinal`` (Ihlong, about h3)
     [kg m^2]; teeter spring [N m/rad] and damper [N m s/rad]; hub ``mass`` [kg] (only matters
-    with gravity).
+    with gravity).  ``counterweight_mass`` [kg]: a point mass on the hub at
+    ``counterweight_radius`` [m] from the teeter-axis point along -h1 (opposite blade 0), the
+    balance of a one-bladed rotor; it is not included in the nacelle's yaw inertia (like the
+    blades) and breaks the blade relabelling symmetry of a rotor with two or more blades.
     """
 
     radius: float = 1.8
@@ -138,6 +141,8 @@ class Hub:
     teeter_stiffness: float = 0.0
     teeter_damping: float = 0.0
     mass: float = 0.0
+    counterweight_mass: float = 0.0
+    counterweight_radius: float = 0.0
 
 
 @dataclass(frozen=True)

@@ -89,14 +89,19 @@ def periodic_steady_state(model, harmonics: int = 8, tol: float = 1e-9, max_iter
         y = model.steady_state()
         return PeriodicSteadyState(times=np.array([0.0]), states=y[None], period=model.period,
                                    iterations=0, constant=True)
-    except ValueError:
-        pass  # genuinely periodic
+    except (ValueError, ConvergenceError):
+        pass  # genuinely periodic (or no constant state found): harmonic balance
     T = model.period
     scale = max(1.0, np.abs(model.residual(np.zeros(model.n), model.initial_guess(), 0.0)).max())
     guess = None
     H = int(harmonics)
+    try:
+        guess = _harmonic_balance(model, H, tol, max_iter, progress, None)
+    except ConvergenceError as exc:
+        guess = _continuation(model, H, tol, max_iter, progress, exc)
     while True:
-        ps = _harmonic_balance(model, H, tol, max_iter, progress, guess)
+        ps = guess if guess.harmonics == H else _harmonic_balance(model, H, tol, max_iter,
+                                                                  progress, guess)
         mids = (np.arange(2 * H + 1) + 0.5) * T / (2 * H + 1)
         err = max(np.abs(model.residual(ps.rate_at(t), ps.at(t), t)).max() for t in mids[::3])
         ps.interpolation_error = float(err / scale)
@@ -107,6 +112,63 @@ def periodic_steady_state(model, harmonics: int = 8, tol: float = 1e-9, max_iter
                               RuntimeWarning, stacklevel=2)
             return ps
         guess, H = ps, 2 * H
+
+
+#: Continuation: the first homotopy parameter, and the smallest step factor before giving up.
+CONTINUATION_START = 1e-4
+CONTINUATION_MIN_STEP = 1.02
+
+
+def homotopy_turbine(turbine, lam: float):
+    """The turbine with its periodic forcing scaled down by ``lam`` in (0, 1]: gravity times
+    lam and, with a free yaw bearing, the nacelle's yaw inertia divided by lam (the yaw
+    response to an imbalance scales as 1/inertia, and a free yaw angle has no resonance to
+    cross on the way).  lam = 1 is the turbine itself."""
+    from dataclasses import replace
+    out = turbine
+    if turbine.gravity.enabled:
+        out = replace(out, gravity=replace(out.gravity, g=out.gravity.g * lam))
+    if turbine.nacelle.yaw_free:
+        out = replace(out, nacelle=replace(out.nacelle,
+                                           yaw_inertia=out.nacelle.yaw_inertia / lam))
+    return out
+
+
+def _continuation(model, harmonics, tol, max_iter, progress, first_error):
+    """Harmonic balance by natural-parameter continuation from a weakly forced turbine
+    (homotopy_turbine at CONTINUATION_START) to the turbine itself, each solution the next
+    one's starting guess; the step (a factor on lam) grows after a success and shrinks after
+    a failure.  Raises ConvergenceError saying where the continuation stalled."""
+    from .assembly import TurbineModel
+    T0 = model.turbine
+    if not (T0.gravity.enabled or T0.nacelle.yaw_free):
+        raise first_error
+    lam, step, guess, last = CONTINUATION_START, 10.0, None, None
+    while True:
+        m = TurbineModel(homotopy_turbine(T0, lam)) if lam < 1 else model
+        if progress is not None:
+            progress(0.5, f"periodic steady state: continuation at {lam:.3g}")
+        try:
+            ps = _harmonic_balance(m, harmonics, tol, max_iter, None, guess)
+        except ConvergenceError:
+            if last is None or step < CONTINUATION_MIN_STEP:
+                where = "its start" if last is None else f"{last:.4g}"
+                raise ConvergenceError(
+                    f"periodic steady state: Newton did not converge from the rotor in rigid "
+                    f"rotation ({first_error}), and a continuation from a weakly forced "
+                    f"turbine (gravity x lam, free-yaw inertia / lam, lam from "
+                    f"{CONTINUATION_START:g} to 1) stalled at lam = {where}: no periodic "
+                    "steady state near that family (an unbalanced rotor on a free yaw bearing "
+                    "may have none; yaw damping, a yaw spring or hub.counterweight_mass help)"
+                ) from None
+            step = float(np.sqrt(step))
+            lam = min(1.0, last * step)
+            continue
+        if lam >= 1.0:
+            return ps
+        guess, last = ps, lam
+        step = min(10.0, step * step)
+        lam = min(1.0, lam * step)
 
 
 def _harmonic_balance(model, harmonics, tol, max_iter, progress, guess) -> PeriodicSteadyState:

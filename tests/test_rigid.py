@@ -478,6 +478,7 @@ def _lagrange_check(tb, seed, n=4):
     In = r.nacelle_yaw_inertia
     A, C = tb.hub.inertia_lateral, tb.hub.inertia_longitudinal
     mh = tb.hub.mass
+    mc, cw = tb.hub.counterweight_mass, np.array([-tb.hub.counterweight_radius, 0.0, 0.0])
     g = tb.gravity.g if tb.gravity.enabled else 0.0
     ky, cy = tb.nacelle.yaw_stiffness, tb.nacelle.yaw_damping
     kh, ch = tb.hub.teeter_stiffness, tb.hub.teeter_damping
@@ -487,13 +488,14 @@ def _lagrange_check(tb, seed, n=4):
         # velocities by a complex-step directional derivative along (qd, 1)
         def pos(s):
             bs = ref.bases(q[0] + s * qd[0], q[1] + s * qd[1], t + s)
-            return bs["H"], bs["SH"]
-        Hm, SH = pos(0.0)
+            return bs["H"], bs["SH"], bs["SH"] + bs["H"] @ cw
+        Hm, SH, _ = pos(0.0)
         Hd = np.imag(pos(1j * H_CS)[0]) / H_CS
         vSH = np.imag(pos(1j * H_CS)[1]) / H_CS
+        vcw = np.imag(pos(1j * H_CS)[2]) / H_CS
         w = axial(Hd @ Hm.T)
         return (0.5 * In * qd[0] ** 2 + 0.5 * w @ (Hm @ np.diag([A, A, C]) @ Hm.T) @ w
-                + 0.5 * mh * vSH @ vSH)
+                + 0.5 * mh * vSH @ vSH + 0.5 * mc * vcw @ vcw)
 
     def grad(f, x, h):
         """4th-order central differences (fd4) along each coordinate."""
@@ -509,8 +511,10 @@ def _lagrange_check(tb, seed, n=4):
                                 np.array(tr.qdot(tt)), 1e-3)
         ddt = fd4(dTdqd, t0)
         dTdq = grad(lambda x: T(x, qd, t0), q, 1e-4)
-        V = lambda x: 0.5 * ky * x[0] ** 2 + 0.5 * kh * x[1] ** 2 + mh * g * (
-            ref.bases(x[0], x[1], t0)["SH"][0])
+        def V(x):
+            bs_ = ref.bases(x[0], x[1], t0)
+            return (0.5 * ky * x[0] ** 2 + 0.5 * kh * x[1] ** 2 + mh * g * bs_["SH"][0]
+                    + mc * g * (bs_["SH"] + bs_["H"] @ cw)[0])
         dV = grad(V, q, 1e-4)
         dR = np.array([cy * qd[0], ch * qd[1]])
         # virtual work of the root loads
@@ -550,6 +554,15 @@ def test_lagrange_paper():
 def test_lagrange_general(blades):
     """Reference: as test_lagrange_paper, everything switched on; 1e-7 x largest term."""
     _lagrange_check(general_turbine(blades), seed=21 + blades)
+
+
+def test_lagrange_one_blade_with_counterweight():
+    """Reference: as test_lagrange_paper, one blade on a teetering hub with a 400 kg
+    counterweight 1.6 m opposite it (its kinetic energy and weight in T and V), everything
+    else switched on; 1e-7 x largest term."""
+    tb = general_turbine(1)
+    _lagrange_check(replace(tb, hub=replace(tb.hub, counterweight_mass=400.0,
+                                            counterweight_radius=1.6)), seed=29)
 
 
 def test_energy_power_balance_yaw_locked():

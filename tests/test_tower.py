@@ -195,7 +195,13 @@ def test_tower_top_loads_of_static_blade_loads_by_hand():
 
 
 # ---------------------------------------------------------------------------- Kane vs N-E
-def _everything(blades=2, teeter=True):
+def _everything(blades=2, teeter=True, counterweight=0.0):
+    T = _everything_base(blades, teeter)
+    return dc.replace(T, hub=dc.replace(T.hub, counterweight_mass=counterweight,
+                                        counterweight_radius=1.3 if counterweight else 0.0))
+
+
+def _everything_base(blades, teeter):
     return dc.replace(
         PAPER, tower=_tower(20.0, 300.0, 1e10, 1e10, 1e10, 100.0, 2),
         gravity=Gravity(True, 9.81),
@@ -208,17 +214,19 @@ def _everything(blades=2, teeter=True):
                        inertia_longitudinal=30.0))
 
 
-@pytest.mark.parametrize("blades,teeter", [(2, True), (3, False)])
-def test_kane_with_tower_motion_equals_newton_euler(blades, teeter):
+@pytest.mark.parametrize("blades,teeter,counterweight", [(2, True, 0.0), (3, False, 0.0),
+                                                         (1, True, 450.0)])
+def test_kane_with_tower_motion_equals_newton_euler(blades, teeter, counterweight):
     """A smooth, arbitrary motion of the tower top (translation and finite rotation), yaw and
     teeter; every Kane row of the rigid system equals Newton-Euler for nacelle + hub with the
     accelerations of an INDEPENDENT kinematic model (positions, rotation matrices as functions
     of time, differentiated by complex step and central differences): the tower-top rows are
     the force and moment (about the tower-top point) on the tower; the teeter row is the
     hub's moment balance about the teeter axis; the yaw row is the balance about the yaw axis
-    of nacelle + hub minus (y1 . h2) times the teeter row.  Tolerance 1e-6 of the largest term
-    (the O(dt^2) second differences)."""
-    T = _everything(blades, teeter)
+    of nacelle + hub minus (y1 . h2) times the teeter row.  One blade: with a counterweight
+    (a point mass on the hub opposite the blade).  Tolerance 1e-6 of the largest term (the
+    O(dt^2) second differences)."""
+    T = _everything(blades, teeter, counterweight)
     r = RigidSystem(T)
     Om0, d, e, lhd1, tilt = r.omega0, r.d, r.e, r.lhd1, r.tilt
     pre = T.rotor.precone
@@ -237,13 +245,14 @@ def test_kane_with_tower_motion_equals_newton_euler(blades, teeter):
         TY = p_c[0] + p_c[1] * t + p_c[2] * t * t
         SH = TY + d * S[:, 2]
         cg = TY + Y @ np.array(T.nacelle.cg_offset)
+        cw = SH + H @ np.array([-T.hub.counterweight_radius, 0.0, 0.0])
         roots, Bk = [], []
         for k in range(blades):
             ph = 2 * np.pi * k / blades
             roots.append(SH + H @ np.array([e * np.cos(ph), e * np.sin(ph), -lhd1]))
             Bk.append(H @ rot3(ph) @ rot2(-pre))
-        return dict(th=th, Tt=Tt, qy=qy, qh=qh, Y=Y, H=H, TY=TY, SH=SH, cg=cg, roots=roots,
-                    B=Bk)
+        return dict(th=th, Tt=Tt, qy=qy, qh=qh, Y=Y, H=H, TY=TY, SH=SH, cg=cg, cw=cw,
+                    roots=roots, B=Bk)
 
     hc = 1e-30
 
@@ -265,6 +274,7 @@ def test_kane_with_tower_motion_equals_newton_euler(blades, teeter):
     al_T, al_Y, al_H = (d2(lambda x: omega(k, x), t) for k in ("Tt", "Y", "H"))
     a_SH = d2(lambda x: rate("SH", x), t)
     a_cg = d2(lambda x: rate("cg", x), t)
+    a_cw = d2(lambda x: rate("cw", x), t)
     # generalized speeds of the model from the trajectory
     y1, h2 = Y[:, 0], H[:, 1]
     U1 = rate("qy", t)
@@ -295,10 +305,11 @@ def test_kane_with_tower_motion_equals_newton_euler(blades, teeter):
     dH_H = IH @ al_H + np.cross(w_H, IH @ w_H)
     dH_Y = IY @ al_Y + np.cross(w_Y, IY @ w_Y)
     rel = lambda p: p - s["TY"]
-    force = sum(FN) + (mh + mn) * g - mh * a_SH - mn * a_cg
+    mc = T.hub.counterweight_mass
+    force = sum(FN) + (mh + mn + mc) * g - mh * a_SH - mn * a_cg - mc * a_cw
     mom_TY = (sum(np.cross(rel(s["roots"][k]), FN[k]) + MN[k] for k in range(blades))
               + np.cross(rel(s["SH"]), mh * (g - a_SH)) + np.cross(rel(s["cg"]), mn * (g - a_cg))
-              - dH_H - dH_Y)
+              + np.cross(rel(s["cw"]), mc * (g - a_cw)) - dH_H - dH_Y)
     scale = max(np.abs(force).max(), np.abs(mom_TY).max())
     np.testing.assert_allclose(res[r.n_u:r.n_u + 3], Tt.T @ force, atol=1e-6 * scale)
     np.testing.assert_allclose(res[r.n_u + 3:], Tt.T @ mom_TY, atol=1e-6 * scale)
@@ -306,7 +317,7 @@ def test_kane_with_tower_motion_equals_newton_euler(blades, teeter):
     yaw_spring = -T.nacelle.yaw_stiffness * s["qy"] - T.nacelle.yaw_damping * U1
     if teeter:
         mom_SH = (sum(np.cross(s["roots"][k] - s["SH"], FN[k]) + MN[k] for k in range(blades))
-                  - dH_H)
+                  + np.cross(s["cw"] - s["SH"], mc * (g - a_cw)) - dH_H)
         teeter_row = h2 @ mom_SH + T.hub.teeter_stiffness * s["qh"] + T.hub.teeter_damping * qh_dot
         assert res[1] == pytest.approx(teeter_row, abs=1e-6 * scale)
         yaw_row = y1 @ mom_TY + yaw_spring - (y1 @ h2) * teeter_row

@@ -128,7 +128,7 @@ _TOP = {"name": False, "rotor": True, "hub": True, "nacelle": True, "blade": Tru
 _ROTOR = {"speed": True, "blades": True, "precone": False}
 _HUB = {"radius": True, "undersling": False, "teeter": True, "inertia_lateral": True,
         "inertia_longitudinal": True, "teeter_stiffness": False, "teeter_damping": False,
-        "mass": False}
+        "mass": False, "counterweight_mass": False, "counterweight_radius": False}
 _NACELLE = {"yaw_inertia": True, "yaw_stiffness": False, "yaw_damping": False,
             "yaw_to_teeter": True, "shaft_tilt": False, "yaw_free": True, "mass": False,
             "cg_offset": False, "inertia_pitch": False, "inertia_roll": False}
@@ -603,7 +603,10 @@ def _build(c: _Checker, data: Any, default_name: str) -> Optional[Turbine]:
                    inertia_longitudinal=c.number(h, "inertia_longitudinal", "hub", "> 0"),
                    teeter_stiffness=c.number(h, "teeter_stiffness", "hub", ">= 0", 0.0),
                    teeter_damping=c.number(h, "teeter_damping", "hub", ">= 0", 0.0),
-                   mass=c.number(h, "mass", "hub", ">= 0", 0.0))
+                   mass=c.number(h, "mass", "hub", ">= 0", 0.0),
+                   counterweight_mass=c.number(h, "counterweight_mass", "hub", ">= 0", 0.0),
+                   counterweight_radius=c.number(h, "counterweight_radius", "hub", ">= 0",
+                                                 0.0))
     if (n := c.mapping(data["nacelle"], "nacelle", _NACELLE)
             if "nacelle" in data else None) is not None:
         nacelle = dict(yaw_inertia=c.number(n, "yaw_inertia", "nacelle", "> 0"),
@@ -744,7 +747,10 @@ def dump_turbine(turbine: Turbine) -> str:
                 "teeter": bool(h.teeter), "inertia_lateral": float(h.inertia_lateral),
                 "inertia_longitudinal": float(h.inertia_longitudinal),
                 "teeter_stiffness": float(h.teeter_stiffness),
-                "teeter_damping": float(h.teeter_damping), "mass": float(h.mass)},
+                "teeter_damping": float(h.teeter_damping), "mass": float(h.mass),
+                **({"counterweight_mass": float(h.counterweight_mass),
+                    "counterweight_radius": float(h.counterweight_radius)}
+                   if h.counterweight_mass or h.counterweight_radius else {})},
         "nacelle": {"yaw_inertia": float(n.yaw_inertia), "yaw_stiffness": float(n.yaw_stiffness),
                     "yaw_damping": float(n.yaw_damping),
                     "yaw_to_teeter": float(n.yaw_to_teeter), "shaft_tilt": float(n.shaft_tilt),

@@ -160,6 +160,11 @@ class RigidSystem:
         self.k_teeter = float(hub.teeter_stiffness)
         self.c_teeter = float(hub.teeter_damping)
         self.hub_mass = float(hub.mass)
+        #: counterweight point mass [kg] and its position relative to the teeter-axis point
+        #: SH in the hub basis h (opposite blade 0)
+        self.counterweight_mass = float(getattr(hub, "counterweight_mass", 0.0))
+        self.counterweight_offset = np.array(
+            [-float(getattr(hub, "counterweight_radius", 0.0)), 0.0, 0.0])
         self.hub_inertia = np.diag([hub.inertia_lateral, hub.inertia_lateral,
                                     hub.inertia_longitudinal]).astype(float)
         self.g = float(turbine.gravity.g) if turbine.gravity.enabled else 0.0
@@ -383,6 +388,13 @@ class RigidSystem:
         T_Y = -(I_Y @ alpha_Y + _cross(w_Y, I_Y @ w_Y))
         Fstar = (k["wr_H"] @ T_H + k["vr_SH"] @ (-self.hub_mass * a_SH)
                  + k["wr_Y"] @ T_Y + k["vr_c"] @ (-self.nacelle_mass * a_c))
+        if self.counterweight_mass:
+            # the counterweight at SH + rho_c (hub-fixed), with its weight
+            rho_c = H @ self.counterweight_offset
+            vr_cw = k["vr_SH"] + _cross(k["wr_H"], rho_c[None, :])
+            a_cw = a_SH + _cross(alpha_H, rho_c) + _cross(w_H, _cross(w_H, rho_c))
+            Fstar = Fstar + vr_cw @ (self.counterweight_mass
+                                     * (np.array([-self.g, 0.0, 0.0]) - a_cw))
         # --- generalized active forces
         F_N = np.einsum("kij,kj->ki", B, Fb)
         M_N = np.einsum("kij,kj->ki", B, Mb)
@@ -513,6 +525,14 @@ class RigidSystem:
         R_star = -self.hub_mass * a_SH
         Fstar = _mv(wr_H, T_star) + _mv(k["vr_SH"], R_star)
         Fstar = Fstar + self._pair(-self.nacelle_yaw_inertia * Ud1, 0.0 * Ud1)
+        if self.counterweight_mass:
+            # the counterweight at SH + rho_c (hub-fixed): v = v_SH + w_H x rho_c
+            rho_c = _mv(H, self.counterweight_offset)
+            vr_cw = k["vr_SH"] + _cross(wr_H, rho_c[..., None, :])
+            a_cw = (a_SH + _cross(alpha_H, rho_c) + _cross(w_H, _cross(w_H, rho_c)))
+            gN = np.zeros(3)
+            gN[0] = -self.g
+            Fstar = Fstar + _mv(vr_cw, self.counterweight_mass * (gN - a_cw))
 
         # --- generalized active forces
         F_N = _mv(B, Fb)
@@ -542,6 +562,8 @@ class RigidSystem:
         if self.teeter and self.n_blades != 2:
             raise ValueError("a teetering hub with %d blades has no blade-relabelling symmetry"
                              % self.n_blades)
+        if self.counterweight_mass:
+            raise ValueError("a hub with a counterweight has no blade-relabelling symmetry")
         signs = [1.0] * int(self.yaw_free) + [-1.0] * int(self.teeter)
         return np.array(signs * 2)
 
@@ -555,12 +577,16 @@ class RigidSystem:
             v_c = k["v_T"] + _cross(wY, k["r_c"])
             I_H = H @ self.hub_inertia @ H.T
             I_Y = Y @ self.nacelle_inertia @ Y.T
+            v_cw = k["v_SH"] + _cross(wH, H @ self.counterweight_offset)
             return (0.5 * (wH @ (I_H @ wH)) + 0.5 * self.hub_mass * (k["v_SH"] @ k["v_SH"])
-                    + 0.5 * (wY @ (I_Y @ wY)) + 0.5 * self.nacelle_mass * (v_c @ v_c))
+                    + 0.5 * (wY @ (I_Y @ wY)) + 0.5 * self.nacelle_mass * (v_c @ v_c)
+                    + 0.5 * self.counterweight_mass * (v_cw @ v_cw))
         self._check_tower(tower)
         k = self._kin(q, u, t)
         H = k["fr"]["H"]
         w = k["w_H"]
         I_H = H @ self.hub_inertia @ np.swapaxes(H, -1, -2)
+        v_cw = k["v_SH"] + _cross(w, _mv(H, self.counterweight_offset))
         return (0.5 * _dot(w, _mv(I_H, w)) + 0.5 * self.hub_mass * _dot(k["v_SH"], k["v_SH"])
+                + 0.5 * self.counterweight_mass * _dot(v_cw, v_cw)
                 + 0.5 * self.nacelle_yaw_inertia * k["U1"] ** 2)
