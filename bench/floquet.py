@@ -36,7 +36,8 @@ import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 
-from hawt_core.campbell import campbell, limit_blas_threads  # noqa: E402
+from hawt_core.campbell import campbell  # noqa: E402
+from hawt_core.threads import limit_blas_threads  # noqa: E402
 from hawt_core.io import load_turbine  # noqa: E402
 from hawt_core.modal import modal_analysis  # noqa: E402
 

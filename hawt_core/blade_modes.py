@@ -333,21 +333,29 @@ def check_rotor_speed(speed) -> float:
 class SpinningBlade:
     """One blade clamped at radius ``hub_radius`` on a hub spinning at ``rotor_speed``.
 
-    Unknowns and residual rows are those of BeamElements (one beam). The root motion is
-    ``v = e Omega0 b2``, ``omega = Omega0 b3`` (root frame), constant.
+    Unknowns and residual rows are those of BeamElements (one beam). The root motion (root
+    frame b, constant) is the rigid system's (hawt_core.rigid) for blade 0 with the yaw locked
+    and the hub rigid: ``v = e Omega0 b2``, ``omega = Omega0 (sin(beta) b1 + cos(beta) b3)``
+    with the precone beta (the coned blade spins about the shaft, not about its own b3, which
+    lowers its centrifugal stiffening); undersling and tilt do not change it.
     """
 
     def __init__(self, turbine: Turbine, elements: Optional[int] = None,
                  rotor_speed: Optional[float] = None):
+        from dataclasses import replace
+        from .rigid import RigidSystem
         self.turbine = turbine
         self.rotor_speed = check_rotor_speed(turbine.rotor.speed if rotor_speed is None
                                              else rotor_speed)
         n_el = check_elements(turbine.blade.elements if elements is None else elements)
         self.beam = BeamElements(mesh_beam(turbine.blade, n_el))
         self.n = self.beam.n
-        e = turbine.hub.radius
-        self.v = np.array([0.0, e * self.rotor_speed, 0.0])
-        self.w = np.array([0.0, 0.0, self.rotor_speed])
+        clamped = replace(turbine, rotor=replace(turbine.rotor, speed=self.rotor_speed),
+                          hub=replace(turbine.hub, teeter=False, counterweight_mass=0.0),
+                          nacelle=replace(turbine.nacelle, yaw_free=False), tower=None,
+                          gravity=replace(turbine.gravity, enabled=False))
+        v, w = RigidSystem(clamped).root_motion(np.zeros(0), np.zeros(0), 0.0)
+        self.v, self.w = np.real(v[0]).astype(float), np.real(w[0]).astype(float)
         self._jac = ColouredJacobian(block_tridiagonal_pattern(self.beam.pattern_blocks()))
         self.differential = self.beam.differential
 
@@ -425,6 +433,12 @@ def blade_modes(turbine: Turbine, elements: Optional[int] = None,
         if isinstance(count, bool) or int(count) != count or count < 1:
             raise ValueError(f"count: {count!r} is not allowed; need an integer >= 1")
         count = int(count)
+    from .threads import blas_threads
+    with blas_threads():
+        return _blade_modes(turbine, elements, rotor_speed, count, method, band_factor)
+
+
+def _blade_modes(turbine, elements, rotor_speed, count, method, band_factor):
     model = SpinningBlade(turbine, elements, rotor_speed)
     y0 = model.steady_state()
     Jy, Jd = model.jacobians(np.zeros(model.n), y0)

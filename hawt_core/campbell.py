@@ -17,7 +17,22 @@ a 2-blade rotor: 0 and +-2 per-rev), solved as a linear assignment (Hungarian
 method,
 ``scipy.optimize.linear_sum_assignment``) on ``1 - MAC`` plus a small frequency-change term
 that only breaks near-ties.  Each track keeps the label its mode had at the first speed where
-it appeared; a mode no track claims starts a new track.
+it appeared; a mode no track claims starts a new track, and afterwards a short track whose
+speeds another track misses, and whose frequency continues that track's smoothly, is merged
+into it (near a coincidence of multipliers two modes' vectors mix for a speed or two and the
+MAC cannot match them).
+
+Resolution in absolute frequency: every speed reports the modes below one band in Hz
+(``max_hz``, default DEFAULT_MAX_PER_REV at the highest speed), so a mode does not appear or
+vanish along the sweep because a per-rev resolution moves with the rotor speed; the Radau
+IIA marching gets the steps per period that band needs at each speed, Hill's method /
+multi-blade coordinates the band itself.
+
+Frames: tracks carry the rotating-frame dominant frequency of every mode and, with three or
+more blades, its fixed-frame frequency (hawt_core.modal.Mode); ``frame`` ("fixed", the
+default for three or more blades, or "rotating") chooses what the table, the plot and the
+``continuous_*`` arrays show.  The two members of a real exponent pair (the teeter pair, the
+free yaw angle's double zero) share a frequency: the plot draws it once (both dampings).
 """
 from __future__ import annotations
 
@@ -46,48 +61,19 @@ MAX_JUMP = 0.3
 
 CSV_COLUMNS = ("speed_rad_s", "speed_rpm", "track", "family", "symmetry", "index",
                "frequency_per_rev", "frequency_hz", "real_per_rev", "damping_ratio", "mac",
-               "harmonic_shift", "continuous_hz")
+               "harmonic_shift", "continuous_hz", "fixed_frame_per_rev", "fixed_frame_hz",
+               "fixed_frame_damping_ratio", "whirl", "frame")
+#: Fragments of at most this many points are merged into a track that misses those speeds.
+FRAGMENT_POINTS = 3
+#: A fragment continues a track when its frequency, re-indexed by up to FRAGMENT_SHIFT whole
+#: per-rev, is within FRAGMENT_TOL (relative) of the track's interpolated (or extrapolated)
+#: frequency there (near a coincidence of two multipliers, e.g. a lag mode 4 per-rev below a
+#: torsion mode, the mixed vector takes the other family's harmonic)
+FRAGMENT_TOL = 0.03
+FRAGMENT_SHIFT = 8
+FRAMES = ("fixed", "rotating")
 
 
-# ---------------------------------------------------------------------------- BLAS threads
-_BLAS_SYMBOLS = ("scipy_openblas_set_num_threads64_", "scipy_openblas_set_num_threads",
-                 "openblas_set_num_threads64_", "openblas_set_num_threads",
-                 "MKL_Set_Num_Threads", "bli_thread_set_num_threads")
-
-
-def limit_blas_threads(n: int = 1) -> int:
-    """Set the thread count of every OpenBLAS/MKL/BLIS loaded in this process (Linux; uses the
-    libraries' own set-threads entry points).  Returns how many libraries were set; 0 where
-    this is not possible.  Worker processes call it so that W workers on W cores do not each
-    start a BLAS thread per core (oversubscription slows the monodromy solves severalfold)."""
-    import ctypes
-    done = 0
-    try:
-        with open("/proc/self/maps") as f:
-            paths = {line.split()[-1] for line in f if "/" in line}
-    except OSError:
-        return 0
-    for path in paths:
-        name = os.path.basename(path).lower()
-        if not any(s in name for s in ("openblas", "mkl_rt", "blis")):
-            continue
-        try:
-            lib = ctypes.CDLL(path)
-        except OSError:
-            continue
-        for sym in _BLAS_SYMBOLS:
-            fn = getattr(lib, sym, None)
-            if fn is not None:
-                try:
-                    fn(int(n))
-                    done += 1
-                except Exception:  # pragma: no cover - exotic builds
-                    pass
-                break
-    return done
-
-
-_LIMITED_PID = None
 
 
 # ---------------------------------------------------------------------------- work unit
@@ -118,26 +104,27 @@ def campbell_point(task: dict) -> dict:
     """One rotor speed: modal analysis and the plain-data summary used by :func:`campbell`.
 
     ``task``: ``{"turbine": Turbine, "speed": float [rad/s], "elements", "steps", "method",
-    "parent_pid": int}``.  Top-level and picklable; in a process other than ``parent_pid`` the
-    BLAS is limited to ``task.get("blas_threads", 1)`` thread(s) first.
+    "parent_pid": int}``.  Top-level and picklable (the analysis limits its BLAS threads
+    itself: hawt_core.threads).
 
     Returns ``{"speed", "modes": [mode dict + "label", ...], "vectors": complex (m, n_modes)
     (x(0) on the display rows, tip metres), "harmonics": complex (2K+1, m, n_modes) (Fourier
     coefficients of the periodic eigenvectors on the same rows) or None, "settings", "unresolved", "compute_time", "warnings" (the
     analysis' warning messages, collected instead of printed), "pid"}``.
     """
-    global _LIMITED_PID
     from .modal import _display_rows, modal_analysis
     pid = os.getpid()
-    if task.get("parent_pid") not in (None, pid) and _LIMITED_PID != pid:
-        limit_blas_threads(int(task.get("blas_threads", 1)))
-        _LIMITED_PID = pid
     import warnings
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         res = modal_analysis(task["turbine"], elements=task.get("elements"),
                              rotor_speed=float(task["speed"]), steps=task.get("steps"),
-                             method=task.get("method"))
+                             method=task.get("method"), max_per_rev=task.get("max_per_rev"))
+    band = task.get("max_hz")
+    if band is not None:        # one band in Hz for the whole sweep, in the sweep's frame
+        fixed = task.get("frame") == "fixed"
+        res.modes = [m for m in res.modes if (m.fixed_frame_hz if fixed and m.fixed_frame_hz
+                                              is not None else m.frequency_hz) <= band]
     messages = list(dict.fromkeys(f"{w.category.__name__}: {w.message}" for w in caught))
     rows, wts = _display_rows(res.model)
     fl = res.floquet
@@ -162,7 +149,9 @@ def campbell_point(task: dict) -> dict:
 @dataclass
 class Track:
     """One mode followed over the speeds; arrays have one entry per speed (NaN where the mode
-    was not found, e.g. above the temporal resolution at that speed)."""
+    was not found, e.g. above the band at that speed).  ``frequency_*``, ``real_per_rev``,
+    ``damping_ratio``: the mode's dominant (rotating-frame for blade modes) values;
+    ``fixed_frame_*``: the fixed-frame ones (three or more blades; NaN otherwise)."""
 
     label: str
     family: str
@@ -177,24 +166,50 @@ class Track:
     #: re-indexing found by the MAC, or :func:`unwrap_harmonics`); NaN where absent
     shift: np.ndarray = field(repr=False)
     #: frequency_per_rev + shift, and the same in Hz (continuous_per_rev times the speed in
-    #: rev/s where shifted, frequency_hz elsewhere): what the Campbell plot draws
+    #: rev/s): the rotating-frame curve of the Campbell plot and table
     continuous_per_rev: np.ndarray = field(repr=False)
     continuous_hz: np.ndarray = field(repr=False)
+    fixed_frame_per_rev: Optional[np.ndarray] = field(default=None, repr=False)
+    fixed_frame_hz: Optional[np.ndarray] = field(default=None, repr=False)
+    fixed_frame_damping_ratio: Optional[np.ndarray] = field(default=None, repr=False)
+    #: fixed-frame curve (fixed_frame_per_rev + shift, in Hz)
+    fixed_continuous_hz: Optional[np.ndarray] = field(default=None, repr=False)
+    whirl: Optional[str] = None
+    #: label of the other member of a real exponent pair with the same frequency (the plot
+    #: draws that frequency once); None otherwise
+    twin: Optional[str] = None
 
     def present(self) -> np.ndarray:
         return np.isfinite(self.frequency_hz)
+
+    def hz(self, frame: str = "rotating") -> np.ndarray:
+        """The continuous frequency [Hz] in ``frame`` ("fixed" needs fixed-frame values)."""
+        if frame == "fixed":
+            if self.fixed_continuous_hz is None:
+                raise ValueError("frame: 'fixed' is not allowed for this rotor (fewer than "
+                                 "three blades); use 'rotating'")
+            return self.fixed_continuous_hz
+        return self.continuous_hz
+
+    def damping(self, frame: str = "rotating") -> np.ndarray:
+        """Damping ratios in ``frame`` (they differ where the frequencies do)."""
+        if frame == "fixed":
+            return self.fixed_frame_damping_ratio
+        return self.damping_ratio
 
 
 @dataclass
 class CampbellResult:
     """Result of :func:`campbell`: ``speeds`` [rad/s] ascending, ``tracks`` (Track list in the
-    order of their first-speed frequencies), ``points`` (the raw per-speed outputs)."""
+    order of their first-speed frequencies), ``points`` (the raw per-speed outputs),
+    ``frame`` ("fixed" or "rotating": what the table and plot show)."""
 
     speeds: np.ndarray
     tracks: list
     points: list = field(repr=False)
     settings: dict = field(default_factory=dict)
     compute_time: float = 0.0
+    frame: str = "rotating"
 
     @property
     def failed(self) -> list:
@@ -214,10 +229,12 @@ class CampbellResult:
     def rows(self) -> list:
         """One dict per (speed, track) where the track has a mode, in speed order."""
         out = []
+        nan = float("nan")
         for i, (w, n) in enumerate(zip(self.speeds, self.rpm)):
             for t in self.tracks:
                 if not np.isfinite(t.frequency_hz[i]):
                     continue
+                fixed = t.fixed_frame_hz is not None
                 out.append({"speed_rad_s": float(w), "speed_rpm": float(n), "track": t.label,
                             "family": t.family, "symmetry": t.symmetry or "",
                             "index": t.index,
@@ -226,7 +243,12 @@ class CampbellResult:
                             "real_per_rev": float(t.real_per_rev[i]),
                             "damping_ratio": float(t.damping_ratio[i]),
                             "mac": float(t.mac[i]), "harmonic_shift": int(t.shift[i]),
-                            "continuous_hz": float(t.continuous_hz[i])})
+                            "continuous_hz": float(t.continuous_hz[i]),
+                            "fixed_frame_per_rev": float(t.fixed_frame_per_rev[i]) if fixed else nan,
+                            "fixed_frame_hz": float(t.fixed_continuous_hz[i]) if fixed else nan,
+                            "fixed_frame_damping_ratio":
+                                float(t.fixed_frame_damping_ratio[i]) if fixed else nan,
+                            "whirl": t.whirl or "", "frame": self.frame})
         return out
 
     def to_csv(self, path) -> str:
@@ -238,22 +260,26 @@ class CampbellResult:
                 w.writerow({k: (f"{v:.12g}" if isinstance(v, float) else v) for k, v in r.items()})
         return str(path)
 
-    def plot(self, path, max_hz: Optional[float] = None, tracks="table2"):
+    def plot(self, path, max_hz: Optional[float] = None, tracks="table2",
+             frame: Optional[str] = None):
         """Campbell diagram (frequency [Hz] vs rotor speed [rpm], 1P..nP rays) and the damping
-        ratios, to a PNG file; ``tracks``: "table2" (default), "all" or a list of labels."""
+        ratios, to a PNG file; ``tracks``: "table2" (default), "all" or a list of labels;
+        ``frame``: "fixed" or "rotating" (default: the result's)."""
         from .plotting import plot_campbell
-        return plot_campbell(self, path, max_hz=max_hz, tracks=tracks)
+        return plot_campbell(self, path, max_hz=max_hz, tracks=tracks,
+                             frame=frame or self.frame)
 
     def table(self) -> str:
+        """The frequencies [Hz] the plot draws (the continuous ones, in the result's frame)."""
         lines = [f"Campbell diagram of '{self.settings.get('turbine', '')}': "
                  f"{len(self.speeds)} speeds, {self.settings.get('elements')} elements, "
-                 f"{self.settings.get('method')} {self.settings.get('steps')} steps/period; "
-                 "frequencies [Hz]"]
+                 f"{self.settings.get('method')}; {self.frame}-frame frequencies [Hz]"]
         head = f"{'rad/s':>8}{'rpm':>8} " + "".join(f"{t.label[:14]:>15}" for t in self.tracks)
         lines.append(head)
+        curves = [t.hz(self.frame) for t in self.tracks]
         for i, (w, n) in enumerate(zip(self.speeds, self.rpm)):
-            vals = "".join(f"{t.frequency_hz[i]:>15.4f}" if np.isfinite(t.frequency_hz[i])
-                           else f"{'-':>15}" for t in self.tracks)
+            vals = "".join(f"{c[i]:>15.4f}" if np.isfinite(c[i]) else f"{'-':>15}"
+                           for c in curves)
             lines.append(f"{w:>8.3f}{n:>8.2f} {vals}")
         for w, msg in self.failed:
             lines.append(f"analysis failed at {w:.4g} rad/s: {msg}")
@@ -299,6 +325,11 @@ def _mac_shift(A, B, max_shift, step):
     return best, arg
 
 
+#: per-speed values kept for a track: rotating-frame frequency [per-rev, Hz], real part,
+#: damping, MAC, harmonic offset, fixed-frame frequency [per-rev], fixed-frame damping
+_COLS = 8
+
+
 def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
                 frequency_weight: float = FREQUENCY_WEIGHT, keep_mac: float = KEEP_MAC,
                 max_jump: float = MAX_JUMP) -> list:
@@ -306,22 +337,28 @@ def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
     reference vector is its latest one matched with MAC >= ``keep_mac``; an assignment is
     refused when the MAC is below ``min_mac`` or the frequency moves by more than
     ``max_jump`` (relative, after the allowed whole-per-rev re-indexings) from the track's
-    previous value."""
+    previous value.  Then fragments (at most FRAGMENT_POINTS speeds) are merged into a
+    track that misses their speeds and whose frequency they continue (FRAGMENT_TOL), and
+    the members of real exponent pairs are marked as twins."""
     S = len(points)
     tracks: list = []   # dicts: label info, per-speed values, reference vector and its offset
+    speeds = np.array([float(p.get("speed", np.nan)) for p in points])
 
     def new_track(m, v):
         t = {"label": m["label"], "family": m["family"], "symmetry": m["symmetry"],
-             "index": m["index"], "vals": np.full((S, 6), np.nan), "vec": v, "off": 0,
-             "f": m["frequency_hz"]}
+             "index": m["index"], "vals": np.full((S, _COLS), np.nan), "vec": v, "off": 0,
+             "f": m["frequency_hz"], "whirl": m.get("whirl")}
         tracks.append(t)
         return t
 
     def put(t, i, m, v, mac, off, w):
         # off: whole per-rev added to the reported frequency to continue the track (the
         # harmonic re-indexing found by the MAC, accumulated from the track's first point)
+        ff = m.get("fixed_frame_per_rev")
+        fz = m.get("fixed_frame_damping_ratio")
         t["vals"][i] = (m["frequency_per_rev"], m["frequency_hz"], m["real_per_rev"],
-                        m["damping_ratio"], mac, off)
+                        m["damping_ratio"], mac, off, np.nan if ff is None else ff,
+                        np.nan if fz is None else fz)
         t["f"] = m["frequency_hz"] + off * w / (2 * np.pi) if np.isfinite(w) else \
             m["frequency_hz"]
         if not mac < keep_mac:
@@ -366,7 +403,7 @@ def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
         for j, m in enumerate(modes):
             if j not in taken:
                 put(new_track(m, V[..., j]), i, m, V[..., j], float("nan"), 0, w)
-    speeds = np.array([float(p.get("speed", np.nan)) for p in points])
+    tracks = _merge_fragments(tracks, speeds, step)
     # unique labels (a label reused by a track born later gets a suffix)
     seen = {}
     out = []
@@ -376,16 +413,105 @@ def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
         if seen[lab] > 1:
             lab = f"{lab} #{seen[lab]}"
         v = t["vals"]
-        # harmonics: the offsets found by the MAC; x(0) only: continuity of the values
-        shift = v[:, 5] if use_h else unwrap_harmonics(speeds, v[:, 0])
-        cont = v[:, 0] + np.nan_to_num(shift)
+        # the offsets that keep the curve continuous, from the values themselves (the MAC's
+        # re-indexings only decide the assignment: reported frequencies follow the motion
+        # that names a mode, and a re-indexing the MAC prefers between two mixed vectors
+        # would put a spike into a smooth curve)
+        shift = unwrap_harmonics(speeds, v[:, 0])
+        sh0 = np.nan_to_num(shift)
+        rev_hz = speeds / (2 * np.pi)
+        cont = v[:, 0] + sh0
+        fixed = np.any(np.isfinite(v[:, 6]))
         out.append(Track(label=lab, family=t["family"], symmetry=t["symmetry"],
                          index=t["index"], frequency_per_rev=v[:, 0], frequency_hz=v[:, 1],
                          real_per_rev=v[:, 2], damping_ratio=v[:, 3], mac=v[:, 4],
                          shift=shift, continuous_per_rev=cont,
-                         continuous_hz=np.where(np.nan_to_num(shift) == 0, v[:, 1],
-                                                cont * speeds / (2 * np.pi))))
+                         continuous_hz=np.where(sh0 == 0, v[:, 1], cont * rev_hz),
+                         fixed_frame_per_rev=v[:, 6] if fixed else None,
+                         fixed_frame_hz=v[:, 6] * rev_hz if fixed else None,
+                         fixed_frame_damping_ratio=v[:, 7] if fixed else None,
+                         fixed_continuous_hz=(v[:, 6] + sh0) * rev_hz if fixed else None,
+                         whirl=t.get("whirl")))
+    _mark_twins(out, speeds)
     return out
+
+
+def _track_hz(t: dict, speeds: np.ndarray) -> np.ndarray:
+    """A working track's continuous frequency [Hz] (NaN where absent)."""
+    v = t["vals"]
+    return (v[:, 0] + np.nan_to_num(v[:, 5])) * speeds / (2 * np.pi)
+
+
+def _merge_fragments(tracks: list, speeds: np.ndarray, step: int) -> list:
+    """Merge every short track (at most FRAGMENT_POINTS speeds) into the longer track that
+    misses all of its speeds and whose frequency there (interpolated linearly in Hz between
+    its neighbouring speeds, or extrapolated from its last two) the fragment continues within
+    FRAGMENT_TOL, allowing whole re-indexings by multiples of ``step`` per-rev (up to
+    FRAGMENT_SHIFT); the merged points keep their values with MAC NaN."""
+    rev = speeds / (2 * np.pi)
+    kept = list(tracks)
+    for frag in sorted(tracks, key=lambda t: np.isfinite(t["vals"][:, 0]).sum()):
+        have = np.isfinite(frag["vals"][:, 0])
+        if not 0 < have.sum() <= FRAGMENT_POINTS or not any(frag is k for k in kept):
+            continue
+        idx = np.flatnonzero(have)
+        best = None
+        for cand in kept:
+            if cand is frag:
+                continue
+            ok = np.isfinite(cand["vals"][:, 0])
+            if ok[idx].any() or ok.sum() <= have.sum() or ok.sum() < 2:
+                continue
+            f = _track_hz(cand, speeds)
+            pred = np.interp(speeds[idx], speeds[ok], f[ok])
+            # beyond the ends: linear extrapolation from the two nearest points
+            for j, i in enumerate(idx):
+                if i < np.flatnonzero(ok)[0] or i > np.flatnonzero(ok)[-1]:
+                    near = np.flatnonzero(ok)[:2] if i < np.flatnonzero(ok)[0] \
+                        else np.flatnonzero(ok)[-2:]
+                    (a, b) = near
+                    pred[j] = f[b] + (f[b] - f[a]) / (speeds[b] - speeds[a]) * (speeds[i] - speeds[b])
+            for k in range(-FRAGMENT_SHIFT, FRAGMENT_SHIFT + 1):
+                if k % max(1, step):
+                    continue
+                got = (frag["vals"][idx, 0] + np.nan_to_num(frag["vals"][idx, 5]) + k) * rev[idx]
+                err = float(np.max(np.abs(got - pred) / np.maximum(np.abs(pred), 0.1 * rev[idx])))
+                if err <= FRAGMENT_TOL and (best is None or err < best[0]):
+                    best = (err, cand, k)
+        if best is None:
+            continue
+        _, cand, k = best
+        for i in idx:
+            cand["vals"][i] = frag["vals"][i]
+            cand["vals"][i, 4] = np.nan
+            cand["vals"][i, 5] = np.nan_to_num(frag["vals"][i, 5]) + k
+        kept = [k for k in kept if k is not frag]
+    return kept
+
+
+def _mark_twins(tracks: list, speeds: np.ndarray) -> None:
+    """Mark pairs of tracks of the same family that share a frequency at every speed where
+    either is present (to 1e-6 of it, or of 1e-6 per-rev) and whose real parts are opposite
+    or both zero: the members of a real exponent pair (a divergence and its decaying twin,
+    or a free angle's double zero), drawn once."""
+    rev = speeds / (2 * np.pi)
+    for i, a in enumerate(tracks):
+        if a.twin is not None:
+            continue
+        for b in tracks[i + 1:]:
+            if b.twin is not None or b.family != a.family:
+                continue
+            pa, pb = a.present(), b.present()
+            if not np.array_equal(pa, pb) or not pa.any():
+                continue
+            fa, fb = a.continuous_hz[pa], b.continuous_hz[pa]
+            if np.max(np.abs(fa - fb) / np.maximum(np.abs(fa), 1e-6 * rev[pa])) > 1e-6:
+                continue
+            ra, rb = a.real_per_rev[pa], b.real_per_rev[pa]
+            if (np.max(np.abs(ra + rb)) <= 1e-3 * max(np.max(np.abs(ra)), 1e-6)
+                    or np.max(np.abs(ra) + np.abs(rb)) < 1e-6):
+                a.twin, b.twin = b.label, a.label
+                break
 
 
 def unwrap_harmonics(speeds: np.ndarray, per_rev: np.ndarray, tol: float = 0.25) -> np.ndarray:
@@ -446,28 +572,56 @@ def campbell(turbine: Turbine, speeds, elements: Optional[int] = None,
              steps: Optional[int] = None, method: Optional[str] = None,
              executor: Optional[cf.Executor] = None,
              progress: Optional[Callable[[float, str], None]] = None,
-             errors: str = "skip") -> CampbellResult:
+             errors: str = "skip", frame: Optional[str] = None,
+             max_hz: Optional[float] = None) -> CampbellResult:
     """Floquet modal analysis of ``turbine`` at every rotor speed of ``speeds`` [rad/s]
     (run as :func:`campbell_point` tasks on ``executor``; default a ProcessPoolExecutor with
     ``os.cpu_count()`` workers, shut down afterwards; a given executor is left running), modes
     tracked by MAC + Hungarian assignment.  ``progress(fraction, message)`` is called as
     speeds complete.  The speeds are analysed and reported in ascending order.
 
+    ``max_hz``: the band [Hz] reported at every speed (default: DEFAULT_MAX_PER_REV per-rev
+    at the highest speed); the marching steps per period (``steps``: those at the highest
+    speed, default the method's) grow at lower speeds so that the band stays resolved.
+    ``frame``: "fixed" (default for three or more blades) or "rotating" (default otherwise).
     ``errors``: "skip" (default) keeps going when the analysis fails at a speed (e.g. a steady
     state that does not converge): that point gets no modes and an ``"error"`` message
     (``CampbellResult.failed``); if every speed fails the first error is raised.  "raise"
     raises the first failure."""
+    from .modal import DEFAULT_MAX_PER_REV, DEFAULT_STEPS, MAX_STEPS, STEPS_PER_CYCLE
+    from .modal import validate_request
     if errors not in ("skip", "raise"):
         raise ValueError(f"errors: {errors!r} is not allowed; use 'skip' or 'raise'")
-    from .modal import validate_request
+    blades = int(turbine.rotor.blades)
+    if frame is None:
+        frame = "fixed" if blades >= 3 else "rotating"
+    if frame not in FRAMES:
+        raise ValueError(f"frame: {frame!r} is not allowed; use 'fixed' or 'rotating'")
+    if frame == "fixed" and blades < 3:
+        raise ValueError(f"frame: 'fixed' is not allowed for {blades} blade(s); multi-blade "
+                         "coordinates need three or more (use 'rotating')")
     arr = np.sort(check_speeds(speeds))
     validate_request(elements, None, steps, method)
+    rev_max = arr[-1] / (2 * np.pi)
+    march = method if method in ("radau", "paper") else "radau"
+    base = int(steps) if steps is not None else DEFAULT_STEPS[march]
+    if max_hz is None:          # what the top speed resolves with the steps asked for
+        max_hz = min(DEFAULT_MAX_PER_REV, base / STEPS_PER_CYCLE[march]) * rev_max
+    if not (math.isfinite(float(max_hz)) and float(max_hz) > 0):
+        raise ValueError(f"max_hz: {max_hz!r} is not allowed; need a finite number > 0 [Hz]")
+    max_hz = float(max_hz)
     t0 = time.perf_counter()
     own = executor is None
     if own:
         executor = cf.ProcessPoolExecutor(max_workers=os.cpu_count() or 1)
-    tasks = [{"turbine": turbine, "speed": float(w), "elements": elements, "steps": steps,
-              "method": method, "parent_pid": os.getpid()} for w in arr]
+    tasks = []
+    for w in arr:
+        rev = w / (2 * np.pi)
+        need = int(math.ceil(STEPS_PER_CYCLE[march] * max_hz / rev - 1e-9))
+        tasks.append({"turbine": turbine, "speed": float(w), "elements": elements,
+                      "steps": int(min(MAX_STEPS, max(base, need))), "method": method,
+                      "max_per_rev": 1.05 * max_hz / rev, "max_hz": max_hz, "frame": frame,
+                      "parent_pid": os.getpid()})
     results: list = [None] * len(tasks)
     try:
         if progress is not None:
@@ -507,8 +661,11 @@ def campbell(turbine: Turbine, speeds, elements: Optional[int] = None,
         results[i] = _failed_point(arr[i], exc, rows)
     tracks = track_modes(results)
     s0 = ok[0]["settings"]
+    steps_used = sorted({r["settings"]["steps"] for r in ok if r["settings"].get("steps")})
     settings = {"turbine": turbine.name, "elements": s0["elements"], "method": s0["method"],
-                "steps": s0["steps"], "fast": s0["fast"], "speeds": arr.tolist(),
+                "steps": s0["steps"], "steps_range": (steps_used[0], steps_used[-1])
+                if steps_used else None, "fast": s0["fast"], "speeds": arr.tolist(),
+                "max_hz": max_hz, "frame": frame,
                 "workers": getattr(executor, "_max_workers", None)}
     return CampbellResult(speeds=arr, tracks=tracks, points=results, settings=settings,
-                          compute_time=time.perf_counter() - t0)
+                          compute_time=time.perf_counter() - t0, frame=frame)

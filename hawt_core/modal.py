@@ -42,6 +42,7 @@ from .hill import hill_modes
 from .model import Turbine
 from .multiblade import MultiBladeTransform, fixed_frame_modes
 from .periodic import periodic_steady_state
+from .threads import blas_threads
 
 #: "auto": multi-blade coordinates (Hill's method with constant coefficients, one
 #: eigenproblem) where they make the system time-invariant (3+ identical blades on a rigid
@@ -796,6 +797,13 @@ def modal_analysis(turbine: Turbine, elements: Optional[int] = None,
     stages; ``cancel()`` returning True raises Cancelled."""
     method = method or "auto"
     validate_request(elements, rotor_speed, steps, method, max_per_rev)
+    with blas_threads():
+        return _modal_analysis(turbine, elements, rotor_speed, steps, method, fast, harmonics,
+                               max_per_rev, progress, cancel)
+
+
+def _modal_analysis(turbine, elements, rotor_speed, steps, method, fast, harmonics,
+                    max_per_rev, progress, cancel) -> ModalResult:
     t0 = time.perf_counter()
     timings = {}
 

@@ -382,13 +382,50 @@ def plot_turbine_modes(result, path_or_dir, modes=None) -> list:
 
 
 # ============================================================================ Campbell diagram
-def plot_campbell(result, path, max_hz=None, max_rays: int = 12, tracks="table2") -> Path:
+def _spread(y: np.ndarray, gap: float, lo: float, hi: float) -> np.ndarray:
+    """Label positions: ``y`` moved apart to at least ``gap`` (order kept) and into [lo, hi],
+    each as little as possible: overlapping labels form clusters spread evenly (``gap``
+    apart) about their mean, clamped into the bounds; clusters that then overlap merge, until
+    none do.  Labels that overlap nothing stay where they are."""
+    y = np.asarray(y, float)
+    order = np.argsort(y)
+    ys = np.clip(y[order], lo, hi)
+    clusters = [[v] for v in ys]               # original positions per cluster
+    pos = [v for v in ys]                      # first (lowest) label position per cluster
+
+    def place(c):
+        size = gap * (len(c) - 1)
+        start = float(np.mean(c)) - size / 2
+        return min(max(start, lo), hi - size) if hi - lo >= size else lo
+
+    changed = True
+    while changed:
+        changed = False
+        for i in range(1, len(clusters)):
+            top_prev = pos[i - 1] + gap * (len(clusters[i - 1]) - 1)
+            if pos[i] < top_prev + gap - 1e-12:
+                clusters[i - 1] += clusters.pop(i)
+                pos.pop(i)
+                pos[i - 1] = place(clusters[i - 1])
+                changed = True
+                break
+    z = np.concatenate([p + gap * np.arange(len(c)) for p, c in zip(pos, clusters)])
+    out = np.empty_like(z)
+    out[order] = z
+    return out
+
+
+def plot_campbell(result, path, max_hz=None, max_rays: int = 12, tracks="table2",
+                  frame: str = "rotating") -> Path:
     """Campbell diagram of a CampbellResult: frequency [Hz] of the tracks against the rotor
     speed [rpm] with the 1P..nP excitation rays (n <= max_rays), and the damping ratios below.
     ``tracks``: "table2" (default: the rigid yaw/teeter tracks and the first two of each
     elastic (family, symmetry), as in the paper's Table 2), "all", or a list of labels.
+    ``frame``: "rotating" or "fixed" (three or more blades: multi-blade coordinates).
     The curves are the tracks' continuous frequencies (the dominant frequency plus the integer
-    per-rev that keeps a track continuous; such points are circled). PNG."""
+    per-rev that keeps a track continuous; such points are circled), each labelled at its
+    right end (labels pushed apart so that none overlaps); the two members of a real pair
+    (Track.twin) are drawn once, their dampings both.  PNG."""
     any_shift = False
     plt = _pyplot()
     rpm = np.asarray(result.rpm, float)
@@ -403,55 +440,76 @@ def plot_campbell(result, path, max_hz=None, max_rays: int = 12, tracks="table2"
         tracks = [t for t in result.tracks if t.label in wanted]
     if not tracks:
         raise ValueError("plot: no tracks to plot")
-    fmax = max([np.nanmax(t.continuous_hz) for t in tracks if np.any(t.present())] or [1.0])
+    curve = {id(t): t.hz(frame) for t in tracks}
+    fmax = max([np.nanmax(curve[id(t)]) for t in tracks if np.any(t.present())] or [1.0])
     top = float(max_hz) if max_hz else 1.05 * fmax
-    fig, (ax, axd) = plt.subplots(2, 1, figsize=(9, 8.5), sharex=True,
-                                  gridspec_kw={"height_ratios": [3, 1.3]})
-    rev_hz = rpm[-1] / 60.0 if len(rpm) else 1.0
-    nmax = min(max_rays, max(1, int(math.ceil(top / max(rev_hz, 1e-12)))))
+    fig, (ax, axd) = plt.subplots(2, 1, figsize=(10, 9), sharex=True,
+                                  gridspec_kw={"height_ratios": [3, 1.2]})
     x = np.array([0.0, rpm.max() * 1.02 if len(rpm) else 1.0])
+    nmax = min(max_rays, max(1, int(math.ceil(top * 60.0 / max(x[1], 1e-12)))))
     for n in range(1, nmax + 1):
-        ax.plot(x, n * x / 60.0, color="0.8", lw=0.8, zorder=0)
+        ax.plot(x, n * x / 60.0, color="0.85", lw=0.8, zorder=0)
+        # the label inside the panel where the ray leaves it (top or right edge)
         xe = min(x[1], top * 60.0 / n)
-        ax.text(xe, n * xe / 60.0, f" {n}P", color="0.5", fontsize=7, va="bottom",
-                ha="right" if xe < x[1] else "left")
+        ax.text(xe, min(n * xe / 60.0, top), f"{n}P ", color="0.55", fontsize=6,
+                va="top" if xe < x[1] else "bottom", ha="right", zorder=0)
     styles = {"symmetric": "-", "collective": "-", "antisymmetric": "--", "cyclic": "--",
-              "differential": "-."}
+              "backward-whirl": "--", "forward-whirl": ":", "differential": "-."}
     markers = {"flap": "o", "lag": "s", "torsion": "^", "teeter": "D", "yaw": "v",
-               "axial": "x", "shear": "+"}
+               "axial": "x", "shear": "+", "tower": "P"}
+    drawn = set()
+    ends = []                                   # (y at the right end, label, colour)
     for i, t in enumerate(tracks):
         ok = t.present()
-        if not ok.any() or np.nanmin(t.continuous_hz) > top:
-            continue
+        c = curve[id(t)]
         col = f"C{i % 10}"
-        ls = styles.get(t.symmetry or "", "-")
+        ls = styles.get((t.symmetry or "").split("-whirl")[0] + ("-whirl" if "whirl" in
+                                                                  (t.symmetry or "") else ""),
+                        "-")
         mk = markers.get(t.family, ".")
-        ax.plot(rpm, t.continuous_hz, ls=ls, marker=mk, ms=3.5, color=col, label=t.label)
+        axd.plot(rpm, t.damping(frame), ls=ls, marker=mk, ms=3, color=col)
+        if not ok.any() or np.nanmin(c) > top or t.twin in drawn:
+            continue
+        drawn.add(t.label)
+        ax.plot(rpm, c, ls=ls, marker=mk, ms=3, color=col)
         shifted = np.nan_to_num(t.shift) != 0
         if shifted.any():
-            ax.plot(rpm[shifted], t.continuous_hz[shifted], ls="none", marker="o", ms=8,
-                    mfc="none", mec=col)
+            ax.plot(rpm[shifted], c[shifted], ls="none", marker="o", ms=8, mfc="none", mec=col)
             any_shift = True
-        axd.plot(rpm, t.damping_ratio, ls=ls, marker=mk, ms=3.5, color=col)
+        j = np.flatnonzero(ok)[-1]
+        if c[j] <= top:
+            ends.append((c[j], t.label + (" (\u00b1 pair)" if t.twin else ""), col))
+    if ends:
+        gap = top / 58.0                        # about one 7-point text line of the panel
+        ys = _spread(np.array([e[0] for e in ends]), gap, 0.0, top)
+        xl = x[1]
+        for (y0, lab, col), y in zip(ends, ys):
+            ax.annotate(lab, xy=(rpm.max(), y0), xytext=(xl + 0.02 * (xl - rpm.min()), y),
+                        fontsize=7, color=col, va="center", ha="left",
+                        arrowprops=dict(arrowstyle="-", color=col, lw=0.5, alpha=0.6),
+                        annotation_clip=False)
     ax.set_ylim(0.0, top)
     lo = rpm.min() if len(rpm) else 0.0
     span = (rpm.max() - lo) if len(rpm) else 1.0
     ax.set_xlim(max(0.0, lo - 0.05 * max(span, 1e-9 + lo * 0.1)), x[1])
     if any_shift:
-        ax.text(0.99, 0.01, "circled: dominant harmonic moved by whole per-rev for continuity",
-                transform=ax.transAxes, ha="right", va="bottom", fontsize=7, color="0.4")
-    ax.set_ylabel("frequency [Hz]")
-    ax.set_title(f"Campbell diagram: {result.settings.get('turbine', '')}\n"
-                 f"{result.settings.get('elements')} elements, "
-                 f"{result.settings.get('method')} {result.settings.get('steps')} steps/period",
-                 fontsize=10)
+        ax.text(0.01, 0.99, "circled: dominant harmonic moved by whole per-rev for continuity",
+                transform=ax.transAxes, ha="left", va="top", fontsize=7, color="0.4")
+    ax.set_ylabel(f"{frame}-frame frequency [Hz]")
+    st = result.settings
+    rng = st.get("steps_range") or (st.get("steps"), st.get("steps"))
+    how = ((f"{st.get('method')} {rng[0]}" + (f"-{rng[1]}" if rng[1] != rng[0] else "")
+            + " steps/period") if st.get("method") in ("radau", "paper")
+           else f"{st.get('method')}")
+    ax.set_title(f"Campbell diagram: {st.get('turbine', '')}\n"
+                 f"{st.get('elements')} elements, {how}, {frame} frame", fontsize=10)
     ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=7, ncol=2, loc="upper left")
     axd.axhline(0.0, color="0.5", lw=0.8)
     axd.set_xlabel("rotor speed [rpm]")
     axd.set_ylabel("damping ratio")
     axd.grid(True, alpha=0.3)
     fig.tight_layout()
+    fig.subplots_adjust(right=0.78)
     path = Path(path)
     fig.savefig(path, format="png", dpi=100)
     plt.close(fig)

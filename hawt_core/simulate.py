@@ -51,6 +51,7 @@ import scipy.sparse.linalg as spl
 from .fem.beam import BLOCK_SIZE, ROOT_SIZE
 from .jacobian import STEP, ColouredJacobian
 from .window import WindowFailure, WindowSolver, midpoint_arguments, step_matrix
+from .threads import blas_threads
 
 __all__ = ["Simulator", "SimulationError", "NAMED", "consistent_state", "cmd_simulate",
            "parse_perturb"]
@@ -905,10 +906,11 @@ class Simulator:
         """Advance one step. Raises SimulationError on failure (the state is unchanged)."""
         w0 = time.perf_counter()
         try:
-            if self.method == "window":
-                self._window_step()
-            else:
-                self._step()
+            with blas_threads():        # many small dense solves: one thread is fastest
+                if self.method == "window":
+                    self._window_step()
+                else:
+                    self._step()
         finally:
             self.wall_seconds += time.perf_counter() - w0
 

@@ -32,10 +32,25 @@ def turbine():
     return load_turbine(None)
 
 
+def sweep_steps(w):
+    """Steps per period the sweep uses at speed w: STEPS at the highest speed, more below it
+    so that the band in Hz (STEPS / 8 per-rev at the top speed) stays resolved."""
+    return int(np.ceil(STEPS * max(SPEEDS) / w - 1e-9))
+
+
+def band_hz():
+    return STEPS / 8 * max(SPEEDS) / (2 * np.pi)
+
+
 @pytest.fixture(scope="module")
 def direct(turbine):
-    return {w: modal_analysis(turbine, elements=ELEMENTS, rotor_speed=w, steps=STEPS)
-            for w in SPEEDS}
+    """modal_analysis at each speed with the sweep's steps, modes above the band dropped."""
+    out = {}
+    for w in SPEEDS:
+        r = modal_analysis(turbine, elements=ELEMENTS, rotor_speed=w, steps=sweep_steps(w))
+        r.modes = [m for m in r.modes if m.frequency_hz <= band_hz()]
+        out[w] = r
+    return out
 
 
 @pytest.fixture(scope="module")
@@ -60,14 +75,16 @@ def _pairs(modes):
 
 @pytest.mark.parametrize("which", ["threaded", "processes"])
 def test_same_frequencies_as_direct_modal_analysis(which, request, direct):
-    """Reference: modal_analysis called directly at each speed (same elements and steps).
-    Tolerance: 1e-10 per-rev on every frequency and real part (the same computation; only
-    the BLAS thread count differs in worker processes).  Every mode of every speed is in
-    exactly one track."""
+    """Reference: modal_analysis called directly at each speed (same elements; the steps per
+    period scale as 1 / speed from STEPS at the top speed, so that one band in Hz is resolved
+    at every speed; modes above it dropped).  Tolerance: 1e-10 per-rev on every frequency and
+    real part (the same computation).  Every mode of every speed is in exactly one track."""
     res = request.getfixturevalue(which)
     assert np.allclose(res.speeds, SPEEDS, rtol=0, atol=0)
+    assert res.settings["max_hz"] == pytest.approx(band_hz(), rel=1e-12)
     for i, w in enumerate(SPEEDS):
         ref = direct[w]
+        assert res.points[i]["settings"]["steps"] == sweep_steps(w)
         got = _pairs(res.points[i]["modes"])
         exp = _pairs(ref.modes)
         assert got.shape == exp.shape
@@ -336,3 +353,116 @@ def test_harmonic_mac_invariance():
     assert _mac_matrix(A, C1[..., None], 3, 2)[0, 0] < 0.5
     v = rng.normal(size=(m, 1)) + 1j * rng.normal(size=(m, 1))
     assert abs(_mac_matrix(v, v * np.exp(0.7j))[0, 0] - 1) < 1e-12
+
+
+@pytest.fixture(scope="module")
+def wide_sweep(turbine):
+    """The paper's turbine, N = 4, 12 speeds over 3..9 rad/s (through the multiplier
+    coincidences of lag and torsion modes near 6.5 and 8.6 rad/s), default steps."""
+    with cf.ThreadPoolExecutor(max_workers=2) as pool:
+        return campbell(turbine, np.linspace(3.0, 9.0, 12), elements=4, executor=pool)
+
+
+def test_one_continuous_track_per_mode(wide_sweep):
+    """Every mode below the band is one track present at every speed (no '#2' fragment, no
+    track born at a higher speed); the band is fixed in Hz, so the highest modes at the top
+    speed are also found at the lowest (where they are 3x higher in per-rev: the marching
+    there uses 3x the steps); every curve is smooth: the second difference of its continuous
+    frequency is below 1 % of the frequency on this uniform grid (a whole per-rev slip at
+    3..9 rad/s would be 0.5..1.4 Hz, 3-10 %)."""
+    res = wide_sweep
+    assert not any("#" in t.label for t in res.tracks), [t.label for t in res.tracks]
+    rng = res.settings["steps_range"]
+    assert rng == (400, 1200)
+    high = max(res.tracks, key=lambda t: t.continuous_hz[-1])
+    assert high.continuous_hz[-1] / (res.speeds[-1] / (2 * np.pi)) > 35     # per-rev
+    assert high.present()[0] and high.continuous_hz[0] <= res.settings["max_hz"]
+    for t in res.tracks:
+        assert t.present().all(), t.label
+        c = t.continuous_hz
+        if np.nanmax(c) > 0.5:
+            assert np.max(np.abs(np.diff(c, 2))) < 0.01 * np.nanmax(c), t.label
+
+
+def test_table_prints_what_the_plot_draws(wide_sweep):
+    """The table's numbers are the tracks' continuous frequencies in the result's frame (the
+    curves of the plot), to the printed 4 decimals."""
+    res = wide_sweep
+    lines = res.table().splitlines()[2:2 + len(res.speeds)]
+    for i, line in enumerate(lines):
+        vals = [float(x) for x in line.split()[2:]]
+        exp = [t.hz(res.frame)[i] for t in res.tracks]
+        np.testing.assert_allclose(vals, exp, atol=6e-5)
+
+
+def test_real_pairs_are_twins_and_drawn_once(wide_sweep, tmp_path, monkeypatch):
+    """The teeter pair (+-0.045 per-rev at 1 per-rev: a divergence and its decaying partner)
+    and the free yaw angle's double zero are pairs of tracks with one frequency: marked as
+    twins of each other; the plot draws each pair's frequency once and both dampings."""
+    res = wide_sweep
+    teeter = [t for t in res.tracks if t.family == "teeter"]
+    yaw = [t for t in res.tracks if t.family == "yaw"]
+    assert len(teeter) == 2 and teeter[0].twin == teeter[1].label
+    assert teeter[1].twin == teeter[0].label
+    assert len(yaw) == 2 and yaw[0].twin == yaw[1].label
+    assert np.allclose(teeter[0].real_per_rev, -teeter[1].real_per_rev, rtol=1e-6)
+    assert all(t.twin is None for t in res.tracks if t.family not in ("teeter", "yaw"))
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.axes
+    calls = []
+    real_plot = matplotlib.axes.Axes.plot
+
+    def spy(self, *a, **k):
+        calls.append((self, a))
+        return real_plot(self, *a, **k)
+    monkeypatch.setattr(matplotlib.axes.Axes, "plot", spy)
+    res.plot(tmp_path / "c.png", tracks="all")
+    assert len({id(c[0]) for c in calls}) == 2
+    freq_ax = calls[0][0]                       # the rays are drawn first, on the top panel
+    same = lambda a, c: (len(a) >= 2 and np.shape(a[1]) == np.shape(c)
+                         and np.allclose(np.asarray(a[1], float), c, equal_nan=True))
+    on_freq = [a for ax, a in calls if ax is freq_ax and same(a, teeter[0].continuous_hz)]
+    on_damp = [a for ax, a in calls if ax is not freq_ax and (
+        same(a, teeter[0].damping_ratio) or same(a, teeter[1].damping_ratio))]
+    assert len(on_freq) == 1 and len(on_damp) == 2
+
+
+def test_labels_are_spread_apart():
+    """_spread keeps the order, separates the labels by at least the gap, stays in bounds
+    and moves nothing that did not overlap."""
+    from hawt_core.plotting import _spread
+    y = np.array([1.0, 1.01, 1.02, 5.0, 9.99, 10.0])
+    z = _spread(y, 0.2, 0.0, 10.0)
+    assert np.all(np.diff(z[np.argsort(y)]) >= 0.2 - 1e-12)
+    assert z.min() >= 0 and z.max() <= 10.0
+    assert z[3] == 5.0
+
+
+def test_fixed_frame_campbell_of_a_three_bladed_rotor():
+    """Three blades on a rigid hub, free yaw (multi-blade coordinates): the default frame is
+    the fixed one; each track's fixed-frame curve equals modal_analysis' fixed_frame_hz at
+    each speed (1e-9 Hz), and an uncoupled cyclic torsion pair sits 1 per-rev above and below
+    the collective torsion (forward, backward whirl; 1e-6 per-rev)."""
+    import dataclasses as dc
+    T = load_turbine()
+    T = dc.replace(T, rotor=dc.replace(T.rotor, blades=3),
+                   hub=dc.replace(T.hub, teeter=False, inertia_lateral=1e-9,
+                                  inertia_longitudinal=1e-9))
+    speeds = (5.0, 6.0, 7.0)
+    with cf.ThreadPoolExecutor(max_workers=2) as pool:
+        res = campbell(T, speeds, elements=3, executor=pool, max_hz=12.0)
+    assert res.frame == "fixed"
+    for i, w in enumerate(speeds):
+        ref = modal_analysis(T, elements=3, rotor_speed=w, max_per_rev=1.05 * 12 * 2 * np.pi / w)
+        want = sorted(m.fixed_frame_hz for m in ref.modes if m.fixed_frame_hz <= 12.0)
+        got = sorted(t.hz("fixed")[i] for t in res.tracks if t.present()[i])
+        np.testing.assert_allclose(got, want, atol=1e-9)
+    coll = res.track("1st collective torsion")
+    bw = res.track("1st backward-whirl torsion")
+    fw = res.track("1st forward-whirl torsion")
+    rev = np.array(speeds) / (2 * np.pi)
+    np.testing.assert_allclose((fw.hz("fixed") - coll.hz("fixed")) / rev, 1.0, atol=1e-3)
+    np.testing.assert_allclose((coll.hz("fixed") - bw.hz("fixed")) / rev, 1.0, atol=1e-3)
+    with pytest.raises(ValueError, match="frame"):
+        campbell(load_turbine(), speeds, elements=2, frame="fixed")
