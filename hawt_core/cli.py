@@ -160,17 +160,20 @@ class _StatusLine:
 
 
 @command("modes", help="Floquet modal analysis of the whole turbine (the paper's Table 2)",
-         description="Periodic steady state, exact periodic linearization, monodromy by time "
-                     "marching (Radau IIA, or the paper's central differencing), Fast Floquet, "
-                     "dominant frequencies and automatic labels. Prints a table like the "
-                     "paper's Table 2, or JSON with --json.")
+         description="Periodic steady state, exact periodic linearization, Floquet exponents "
+                     "(multi-blade coordinates for isotropic rotors with 3+ blades, monodromy "
+                     "by time marching with Fast Floquet, or Hill's method), dominant "
+                     "frequencies and automatic labels; with 3+ blades also fixed-frame "
+                     "frequencies and whirl. Prints a table like the paper's Table 2, or "
+                     "JSON with --json.")
 def cmd_modes(args) -> int:
     from .modal import modal_analysis
     turbine = _load(args.turbine)
     status = _StatusLine(not args.json)
     try:
         result = modal_analysis(turbine, elements=args.elements, rotor_speed=args.rotor_speed,
-                                steps=args.steps, method=args.method, progress=status)
+                                steps=args.steps, method=args.method,
+                                max_per_rev=args.max_per_rev, progress=status)
     finally:
         status.close()
     result.settings["turbine_file"] = args.turbine
@@ -188,19 +191,33 @@ def cmd_modes(args) -> int:
     return 0
 
 
+def _per_rev(text: str) -> float:
+    v = finite_float("", unit="per-rev")(text)
+    if not 0 < v <= 1000:
+        raise argparse.ArgumentTypeError(f"{text!r} is not allowed; need a number > 0 and "
+                                         "<= 1000 [per-rev]")
+    return v
+
+
 def _marching_args(p):
-    """The Floquet analysis' time-marching options (modes, campbell)."""
+    """The Floquet analysis' method options (modes, campbell)."""
     p.add_argument("--steps", type=_steps, default=None, metavar="K",
-                   help="time steps per rotor period (default: 400 radau, 1000 paper)")
-    p.add_argument("--method", choices=("radau", "paper"), default="radau",
-                   help="monodromy marching: Radau IIA (default) or the paper's central "
-                        "differencing")
+                   help="time steps per rotor period of the marching methods (default: 400 "
+                        "radau, 1000 paper)")
+    p.add_argument("--method", choices=("auto", "radau", "paper", "hill"), default="auto",
+                   help="auto (default): multi-blade coordinates where they make the system "
+                        "time-invariant (3+ identical blades on a rigid hub, no gravity), "
+                        "else radau; radau: Radau IIA monodromy; paper: the paper's central "
+                        "differencing; hill: Hill's method (harmonic balance eigenproblem)")
 
 
 @cmd_modes.arguments
 def _modes_args(p):
     _model_args(p)
     _marching_args(p)
+    p.add_argument("--max-per-rev", type=_per_rev, default=None, metavar="F",
+                   help="band of Hill's method and multi-blade coordinates: modes below F "
+                        "per-rev (default 50)")
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
     p.add_argument("--plots", metavar="DIR", default=None,
                    help="write mode-shape pictures (PNG) into this folder")
@@ -300,7 +317,8 @@ def cmd_campbell(args) -> int:
     with cf.ProcessPoolExecutor(max_workers=workers) as pool:
         try:
             result = campbell(turbine, args.speeds, elements=args.elements, steps=args.steps,
-                              method=args.method, executor=pool, progress=status)
+                              method=args.method, executor=pool, progress=status,
+                              frame=args.frame, max_hz=args.max_hz)
         finally:
             status.close()
     result.settings["workers"] = workers
@@ -332,6 +350,13 @@ def _campbell_args(p):
                    help="write the Campbell diagram to this PNG file")
     p.add_argument("--csv", metavar="FILE", default=None,
                    help="write speed, track, frequency, real part and damping rows to FILE")
+    p.add_argument("--frame", choices=("fixed", "rotating"), default=None,
+                   help="frequencies in the fixed frame (multi-blade coordinates; the default "
+                        "for 3+ blades) or the rotating frame (the default for 1 and 2)")
+    p.add_argument("--max-hz", type=finite_float("--max-hz", minimum=0.0, unit="Hz"),
+                   default=None, metavar="HZ",
+                   help="band [Hz] reported at every speed (default: what the highest speed "
+                        "resolves, 50 per-rev with the default steps)")
     p.add_argument("--all-modes", action="store_true",
                    help="plot every track (default: the Table 2 ones: yaw, teeter and the "
                         "first two of each family and symmetry)")

@@ -164,7 +164,20 @@ def _window_eigs(Ah, Eh, lo: float, hi: float, stats: dict, depth: int = 0):
 
 
 def _band_eigs(Ah, Eh, hi: float, width: float, stats: dict):
-    """Eigenpairs with 0 <= Im <= hi, in windows of at most ``width`` (see _window_eigs)."""
+    """Eigenpairs with 0 <= Im <= hi, in windows of at most ``width`` (see _window_eigs);
+    a small pencil (at most DENSE_SIZE unknowns) by dense QZ at once."""
+    N = Ah.shape[0]
+    if N <= DENSE_SIZE:
+        import scipy.linalg as sla
+        stats["factorizations"] = stats.get("factorizations", 0) + 1
+        (al, be), X = sla.eig(Ah.toarray(), Eh.toarray(), homogeneous_eigvals=True)
+        fin = np.abs(be) > 1e-10 * np.abs(al)
+        lam = np.full(al.shape, np.inf, complex)
+        lam[fin] = al[fin] / be[fin]
+        r = 0.5 * width
+        sel = fin & (lam.imag >= -1e-9 * max(hi, 1.0)) & (lam.imag <= hi) & \
+            (np.abs(lam.real) <= r)
+        return refine_eigenpairs(Ah, Eh, lam[sel], X[:, sel])
     count = max(1, int(math.ceil(hi / width)))
     edges = np.linspace(0.0, hi, count + 1)
     parts = [_window_eigs(Ah, Eh, a, b, stats) for a, b in zip(edges[:-1], edges[1:])]
@@ -257,10 +270,10 @@ def hill_modes(dae: LinearPeriodicDAE, max_frequency: float, harmonics: Optional
     |eta| <= max_frequency.  Periodic ones: the band is searched in windows of width 2 w
     (halved when crowded); every copy ``eta + i m w`` in the band is found and the centred
     one (dominant harmonic 0 of the weighted vector) kept.  ``harmonics``: the truncation H
-    (default: automatic, from ``max(4, 2 J)`` with J the coefficients' harmonics, grown by
-    half while a kept vector holds more than ``tail_tol`` of its energy in the outermost
-    harmonics |k| = H; measured on the paper's turbine, the relative exponent error is about
-    sqrt(tail)/10 there).  ``observed``, ``weights``: rows and weights (on squared amplitudes)
+    (default: automatic, from ``max(4, 2 J)`` with J the highest of the coefficients'
+    harmonics above 1e-3 of the largest, grown by half while a kept vector holds more than
+    ``tail_tol`` of its energy in the outermost harmonics |k| = H; measured on the paper's
+    turbine, the relative exponent error is about sqrt(tail)/10 there).  ``observed``, ``weights``: rows and weights (on squared amplitudes)
     of the dominant-harmonic test (default: the differential rows, weight 1).  An exponent
     whose real part exceeds half the width of the window that finds it (at least w / 2^8) is
     missed: heavily damped modes need their own search."""
@@ -269,6 +282,13 @@ def hill_modes(dae: LinearPeriodicDAE, max_frequency: float, harmonics: Optional
     t1 = time.perf_counter()
     n, w = dae.n, dae.omega
     J = int(max(fc.k, default=0)) if len(fc.k) else 0
+    # the harmonics that matter for the start of the truncation: those above 1e-3 of the
+    # largest (a periodic steady state with gravity keeps ~20 tiny ones)
+    K = len(fc.k)
+    amp = [max(np.abs(fc.cE[[1 + i, 1 + K + i]]).max(), np.abs(fc.cA[[1 + i, 1 + K + i]]).max())
+           for i in range(K)]
+    big = max(amp, default=0.0)
+    J_eff = max([int(j) for j, a in zip(fc.k, amp) if a >= 1e-3 * big], default=0)
     obs = (np.flatnonzero(dae.differential) if observed is None
            else np.asarray(observed, int))
     wts = np.ones(obs.size) if weights is None else np.asarray(weights, float)
@@ -277,7 +297,7 @@ def hill_modes(dae: LinearPeriodicDAE, max_frequency: float, harmonics: Optional
     elif J == 0:
         H_list = [0]
     else:
-        H_list, H = [], max(4, 2 * J)
+        H_list, H = [], max(4, 2 * J_eff)
         while H <= MAX_HARMONICS:
             H_list.append(H)
             H = int(math.ceil(1.5 * H))

@@ -196,9 +196,10 @@ def _eigenvalue_text(freq: float, real: float) -> str:
 
 
 def _fixed(m):
-    """The fixed-frame fields of a mode (Mode or the hawt_msgs/Mode message), or None."""
+    """The fixed-frame frequency of a mode (Mode or the hawt_msgs/Mode message, whose whirl
+    is empty for one and two blades), or None."""
     f = getattr(m, "fixed_frame_per_rev", None)
-    return None if f is None or not np.isfinite(f) else f
+    return None if not getattr(m, "whirl", None) or f is None or not np.isfinite(f) else f
 
 
 def format_table(header: str, modes, footer=()) -> str:

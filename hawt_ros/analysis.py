@@ -97,6 +97,11 @@ def result_to_plain(result) -> Dict[str, Any]:
             "real_per_rev": _num(m.real_per_rev),
             "frequency_hz": _num(m.frequency_hz),
             "damping_ratio": _num(m.damping_ratio),
+            "fixed_frame_per_rev": _num(getattr(m, "fixed_frame_per_rev", None) or 0.0),
+            "fixed_frame_hz": _num(getattr(m, "fixed_frame_hz", None) or 0.0),
+            "fixed_frame_damping_ratio": _num(getattr(m, "fixed_frame_damping_ratio", None)
+                                              or 0.0),
+            "whirl": str(getattr(m, "whirl", None) or ""),
             "shape": shape,
         })
     settings = dict(getattr(result, "settings", {}) or {})

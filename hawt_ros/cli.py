@@ -75,7 +75,9 @@ def _num(x: float) -> Optional[float]:
 def modes_to_json(response) -> Dict[str, Any]:
     """A ModalAnalysis response/result as the JSON of ``hawt modes --json`` (keys ``settings``
     and ``modes``; each mode: family, symmetry (null when none), index, frequency_per_rev,
-    real_per_rev, frequency_hz, damping_ratio)."""
+    real_per_rev, frequency_hz, damping_ratio, and with three or more blades (whirl not
+    empty) fixed_frame_per_rev, fixed_frame_hz, fixed_frame_damping_ratio, whirl; null
+    otherwise, as ``hawt modes --json``)."""
     s = response.settings
     return {
         "settings": {"turbine": s.turbine, "elements": int(s.elements),
@@ -85,7 +87,11 @@ def modes_to_json(response) -> Dict[str, Any]:
                    "frequency_per_rev": float(m.frequency_per_rev),
                    "real_per_rev": float(m.real_per_rev),
                    "frequency_hz": float(m.frequency_hz),
-                   "damping_ratio": _num(m.damping_ratio)}
+                   "damping_ratio": _num(m.damping_ratio),
+                   **{k: (_num(getattr(m, k, 0.0)) if getattr(m, "whirl", "") else None)
+                      for k in ("fixed_frame_per_rev", "fixed_frame_hz",
+                                "fixed_frame_damping_ratio")},
+                   "whirl": getattr(m, "whirl", "") or None}
                   for m in response.modes],
         "compute_time": float(response.compute_time),
         "message": response.message,

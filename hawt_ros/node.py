@@ -576,11 +576,11 @@ class HawtNode(Node):
         if steps is None:
             try:
                 from hawt_core.modal import DEFAULT_STEPS
-                steps = DEFAULT_STEPS.get(req.method if req else "radau", 0)
+                steps = DEFAULT_STEPS.get(req.method if req else "auto", 0)
             except Exception:  # noqa: BLE001
                 steps = 0
         s.steps = int(steps)
-        s.method = str(rs.get("method", req.method if req else "radau"))
+        s.method = str(rs.get("method", req.method if req else "auto"))
         return s
 
     @staticmethod
@@ -595,6 +595,10 @@ class HawtNode(Node):
             msg.real_per_rev = float(m["real_per_rev"])
             msg.frequency_hz = float(m["frequency_hz"])
             msg.damping_ratio = float(m["damping_ratio"])
+            msg.fixed_frame_per_rev = float(m.get("fixed_frame_per_rev", 0.0))
+            msg.fixed_frame_hz = float(m.get("fixed_frame_hz", 0.0))
+            msg.fixed_frame_damping_ratio = float(m.get("fixed_frame_damping_ratio", 0.0))
+            msg.whirl = str(m.get("whirl", ""))
             sh = m.get("shape")
             if sh:
                 shape = ModeShape()

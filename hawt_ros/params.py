@@ -31,7 +31,7 @@ MAX_STEPS = 1_000_000
 try:  # hawt_core is pure NumPy/SciPy: importing it here is cheap and rclpy-free
     from hawt_core.modal import METHODS as ANALYSIS_METHODS  # type: ignore
 except Exception:  # pragma: no cover - modal.py not available
-    ANALYSIS_METHODS = ("radau", "paper")
+    ANALYSIS_METHODS = ("auto", "radau", "paper", "hill")
 try:
     from hawt_core.modal import MAX_STEPS as _CORE_MAX_STEPS  # type: ignore
     MAX_STEPS = min(MAX_STEPS, int(_CORE_MAX_STEPS))
@@ -201,12 +201,12 @@ class AnalysisRequest:
 
 def validate_request(rotor_speed: Any = 0.0, elements: Any = 0, steps: Any = 0,
                      method: Any = "", default_elements: Optional[int] = None,
-                     default_method: str = "radau") -> AnalysisRequest:
+                     default_method: str = "auto") -> AnalysisRequest:
     """Check a ModalAnalysis request (service or action goal).
 
     Conventions of hawt_msgs/srv/ModalAnalysis: ``rotor_speed`` 0 = the turbine's nominal
     speed (negative, NaN or infinite: rejected); ``elements`` 0 = the node's default;
-    ``steps`` 0 = the method's default; ``method`` '' = 'radau'."""
+    ``steps`` 0 = the method's default; ``method`` '' = 'auto'."""
     allowed = "need a finite number > 0 [rad/s], or 0 = the turbine's nominal speed"
     if _number("rotor_speed", rotor_speed, allowed) < 0:
         raise ParameterError("rotor_speed", rotor_speed, allowed)

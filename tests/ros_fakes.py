@@ -163,11 +163,13 @@ class ModalResult:
                 "unresolved_modes": self.unresolved, "compute_time": self.compute_time}
 
 
-def modal_analysis(turbine, elements=None, rotor_speed=None, steps=None, method="radau",
+def modal_analysis(turbine, elements=None, rotor_speed=None, steps=None, method="auto",
                    progress=None, cancel=None):
-    method = method or "radau"
-    if method not in ("radau", "paper"):
-        raise ValueError(f"method: {method!r} is not allowed; choose one of radau, paper")
+    method = method or "auto"
+    if method not in ("auto", "radau", "paper", "hill"):
+        raise ValueError(f"method: {method!r} is not allowed; choose one of auto, radau, "
+                         "paper, hill")
+    method = "radau" if method == "auto" else method     # the paper's two-bladed rotor
     t0 = time.perf_counter()
     seconds = _env_float("HAWT_FAKE_MODAL_SECONDS", 0.3)
     n = 20

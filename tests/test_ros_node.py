@@ -265,7 +265,7 @@ def test_parameter_validation_messages():
         for w in words:
             assert w in str(ei.value), (w, str(ei.value))
     ok = validate_request(0.0, 0, 0, "", default_elements=4)
-    assert (ok.elements, ok.rotor_speed, ok.steps, ok.method) == (4, None, None, "radau")
+    assert (ok.elements, ok.rotor_speed, ok.steps, ok.method) == (4, None, None, "auto")
     for kw, field in [({"rotor_speed": -1.0}, "rotor_speed"),
                       ({"rotor_speed": float("nan")}, "rotor_speed"),
                       ({"rotor_speed": float("inf")}, "rotor_speed"),
@@ -453,8 +453,11 @@ def test_service_returns_table2_and_cli_json(spawn, tmp_path):
     assert set(data) >= {"modes", "settings"}
     assert data["settings"]["elements"] == 4
     keys = {"family", "symmetry", "index", "frequency_per_rev", "real_per_rev", "frequency_hz",
-            "damping_ratio"}
+            "damping_ratio", "fixed_frame_per_rev", "fixed_frame_hz",
+            "fixed_frame_damping_ratio", "whirl"}
     assert all(set(m) == keys for m in data["modes"])
+    # two blades: no fixed-frame view (null), as `hawt modes --json`
+    assert all(m["whirl"] is None and m["fixed_frame_per_rev"] is None for m in data["modes"])
     assert [m["frequency_per_rev"] for m in data["modes"]] == pytest.approx(list(freqs))
     table = run_cli(["call", "modes"], node.domain, tmp_path, timeout=60)
     assert table.returncode == 0 and "symmetric flap" in table.stdout
@@ -503,7 +506,8 @@ def test_action_progress_and_cancel(spawn):
     # 3. the node still serves (cached: no recomputation)
     client = cli.node.create_client(ModalAnalysis, "/modal_analysis")
     assert client.wait_for_service(timeout_sec=10.0)
-    resp = cli.result(client.call_async(ModalAnalysis.Request(elements=2, steps=64)), 60.0)
+    resp = cli.result(client.call_async(ModalAnalysis.Request(elements=2, steps=64,
+                                                              method="radau")), 60.0)
     assert resp.success and "cached" in resp.message
     # 4. an invalid goal: aborted with a reason
     h = cli.result(ac.send_goal_async(ModalAnalysisAction.Goal(method="euler")), 20.0)

@@ -12,6 +12,7 @@ import pytest
 from scipy.optimize import curve_fit
 
 from hawt_core.assembly import TurbineModel
+from hawt_core.periodic import periodic_steady_state
 from hawt_core.blade_modes import blade_modes
 from hawt_core.fem.beam import q_apply
 from hawt_core.model import Beam, Gravity, Hub, Nacelle, Rotor, SectionTable, Turbine
@@ -281,20 +282,35 @@ def test_stiff_blade_teeter_frequency():
 
 # ---------------------------------------------------------------- gravity: periodic
 def test_gravity_periodic_response():
-    """Reference: with gravity the response from the periodic steady state (harmonic balance)
-    repeats every rotor period. Tolerance: |y(2T) - y(T)| and |y(T) - y(0)| of the tip
-    lead-lag deflection below 2 % of its peak-to-peak gravity oscillation."""
+    """References: (1) the harmonic-balance periodic steady state (spectral collocation, an
+    independent route to the same periodic solution): the simulation started on it follows
+    it over a revolution, tip lead-lag within 1e-3 of its peak-to-peak oscillation (the
+    implicit-midpoint phase error at 2 deg steps; measured 1.0e-4) and with the same
+    peak-to-peak to 1e-3; (2) the closed form of the gravity lead-lag: the blade's weight
+    q = m g turns in the rotor plane once per revolution, quasi-statically (lag 4.75 per-rev),
+    so the tip lag swings by 2 q L^4 / (8 EI3) = 0.0382 m (Euler-Bernoulli cantilever under a
+    uniform load), within 5 % (centrifugal stiffening and the 1/(1 - (1/4.75)^2) dynamic
+    amplification: measured +2.9 %); (3) the response repeats after a period to 1e-4 of it (measured 3.4e-5)."""
     model = TurbineModel(paper(N=2, gravity=True, teeter=False))
+    st = periodic_steady_state(model, harmonics=4)
     sim = Simulator(model, step_deg=2.0, harmonics=4)
     n = 180
     sim.run(2 * model.period)
     h = sim.history()
     lag = h["blade0_u"][:, -1, 1]
+    row = model.layout.blade(0).u[-1][1]
+    ref = np.array([st.at(t)[row] for t in h["time"][: n + 1]])
     ptp = lag[: n + 1].max() - lag[: n + 1].min()
+    ptp_ref = ref.max() - ref.min()
+    closed = 2 * 67.5772 * 9.81 * 8.42 ** 4 / (8 * 21.8e6)
+    d_hb = np.abs(lag[: n + 1] - ref).max()
     d1 = np.abs(lag[n:2 * n + 1] - lag[: n + 1]).max()
-    print(f"lag ptp {ptp:.3e} m, period-to-period {d1:.3e}")
-    assert ptp > 1e-4
-    assert d1 < 0.02 * ptp
+    print(f"lag ptp {ptp:.4e} m (harmonic balance {ptp_ref:.4e}, closed form {closed:.4e}); "
+          f"|sim - hb| {d_hb:.2e}, period-to-period {d1:.2e}")
+    assert d_hb < 1e-3 * ptp
+    assert ptp == pytest.approx(ptp_ref, rel=1e-3)
+    assert ptp == pytest.approx(closed, rel=0.05)
+    assert d1 < 1e-4 * ptp
 
 
 # ---------------------------------------------------------------- errors
