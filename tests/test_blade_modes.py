@@ -267,3 +267,64 @@ def test_cli_help_lists_blade_modes(capsys):
     out = " ".join(capsys.readouterr().out.split())
     for name, entry in cli.COMMANDS.items():
         assert name in out and " ".join(entry["help"].split()) in out
+
+
+@pytest.mark.parametrize("offset", [(0.12, 0.0), (0.0, 0.09), (0.07, -0.05)],
+                         ids=["chordwise", "flapwise", "both"])
+def test_root_loads_of_a_spinning_blade_with_a_mass_centre_offset(offset):
+    """Closed form (rigid-body statics of the spinning blade): a stiff uniform blade (Table 1
+    mass, EI and GJ x 1e5) whose mass centre is offset by (x2, x3) from the reference line,
+    root at e from the shaft, spinning at Omega about b3; each element's mass m dx at
+    (e + x) b1 + x2 b2 + x3 b3 needs the centripetal force -m dx Omega^2 ((e + x) b1 + x2 b2),
+    so the loads the blade exerts on the hub are
+        F0 = m Omega^2 ((e L + L^2 / 2) b1 + x2 L b2),
+        M0 = m Omega^2 (-x2 x3 L b1 + x3 (e L + L^2 / 2) b2 - x2 e L b3)   (about the
+    root point; the sections' own principal inertias about b3 add nothing).
+    In the beam equations these come from the V x P and Omega x H terms of the moment
+    balance (a sign error there moves M0 by the L^2 / 2 part, 400 % here).  Tolerance 1e-4
+    relative to |M0| (the stiff blade's deflection moves the moment arms by ~1e-6)."""
+    x2, x3 = offset
+    sec = dict(TABLE1)
+    for k in ("gj", "ei2", "ei3"):
+        sec[k] = sec[k] * 1e5
+    T = paper()
+    T = Turbine("offset", T.rotor, T.hub, T.nacelle, Beam(L, SectionTable(
+        stations=[0.0, 1.0], **{k: [v, v] for k, v in sec.items()},
+        cg_offset=[[x2, x3], [x2, x3]]), 4))
+    model = SpinningBlade(T, 4)
+    y = model.steady_state()
+    F0, M0 = y[0:3], y[3:6]
+    W2 = OMEGA0 ** 2
+    F_ref = M * W2 * np.array([E_HUB * L + L ** 2 / 2, x2 * L, 0.0])
+    M_ref = M * W2 * np.array([-x2 * x3 * L, x3 * (E_HUB * L + L ** 2 / 2), -x2 * E_HUB * L])
+    np.testing.assert_allclose(F0, F_ref, atol=1e-6 * np.abs(F_ref).max())
+    np.testing.assert_allclose(M0, M_ref, atol=1e-4 * np.abs(M_ref).max())
+
+
+def test_root_moment_of_a_blade_under_gravity_with_a_mass_centre_offset():
+    """Closed form (statics): a stiff uniform cantilever at rest under a gravity vector g with
+    components on all three root axes, mass centre offset xi = (0, x2, x3): the loads it exerts
+    on its clamp are F0 = m L g and M0 = m L (L/2 b1 + xi) x g; the xi x g part is the gravity
+    moment of the offset (a sign error there flips the torsion moment).  Tolerance 1e-6
+    relative (Newton, deflection ~1e-7 of the arms)."""
+    from hawt_core.blade_modes import newton
+    from hawt_core.fem.beam import BeamElements
+    from hawt_core.fem.sections import mesh_beam
+    from hawt_core.jacobian import ColouredJacobian, block_tridiagonal_pattern
+    x2, x3 = 0.15, -0.08
+    sec = dict(TABLE1)
+    for k in ("gj", "ei2", "ei3"):
+        sec[k] = sec[k] * 1e6
+    table = SectionTable(stations=[0.0, 1.0], **{k: [v, v] for k, v in sec.items()},
+                         cg_offset=[[x2, x3], [x2, x3]])
+    beam = BeamElements(mesh_beam(Beam(L, table, 6)))
+    g = np.array([[-3.0, 4.0, -8.5]])
+    z3 = np.zeros((1, 3))
+    jac = ColouredJacobian(block_tridiagonal_pattern(beam.pattern_blocks()))
+    zero = np.zeros(beam.n)
+    f = lambda y: beam.residual(zero[None], y[None], z3, z3, g)[0]
+    y, _ = newton(f, lambda y: jac(f, y), np.zeros(beam.n), tol=1e-13, what="statics")
+    F_ref = M * L * g[0]
+    M_ref = M * L * np.cross(np.array([L / 2, x2, x3]), g[0])
+    np.testing.assert_allclose(y[0:3], F_ref, rtol=1e-9, atol=1e-9 * np.abs(F_ref).max())
+    np.testing.assert_allclose(y[3:6], M_ref, atol=1e-6 * np.abs(M_ref).max())

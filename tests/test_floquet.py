@@ -474,3 +474,25 @@ def test_lowrank_stage_update_on_the_turbine(monkeypatch):
           f"{a.floquet.timings['factorizations']} -> {b.floquet.timings['factorizations']} LU")
     assert worst[False] < 2e-7
     assert worst[True] < 1e-6
+
+
+def test_weights_decide_the_dominant_harmonic():
+    """periodic_modes: the dominant harmonic maximises the WEIGHTED energy sum_r w_r |c_k,r|^2
+    (so units do not decide).  A solution whose row A is harmonic 0 (amplitude 1) and row B
+    harmonic 2 (amplitude 3): weights (100, 1) report the exponent's own frequency (energy 100
+    against 9), weights (1, 1) report it 2 per-rev higher (9 against 1); exact."""
+    from hawt_core.floquet import periodic_modes
+    T, M = 2 * math.pi, 64
+    t = np.arange(M) * T / M
+    eta0 = complex(-0.01, 0.3)
+    x = np.stack([np.ones(M), 3 * np.exp(2j * t)], axis=1) * np.exp(eta0 * t)[:, None]
+
+    def freq(w):
+        X = x[:, :, None].astype(complex).copy()
+        r = periodic_modes(np.array([eta0]), X, X[0].copy(), 1, period=T,
+                           sample_rows=np.array([0, 1]), observed=np.array([0, 1]),
+                           weights=np.array(w, float), method="test", steps=0, fast=False,
+                           blades=1, n_dynamic=1)
+        return r.frequency_per_rev[0]
+    assert freq([100.0, 1.0]) == pytest.approx(0.3, abs=1e-12)
+    assert freq([1.0, 1.0]) == pytest.approx(2.3, abs=1e-12)
