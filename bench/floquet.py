@@ -1,4 +1,6 @@
-"""Benchmark: the paper's Floquet method against the default, and a Campbell sweep.
+"""Benchmark: Floquet for any rotor (three blades, free yaw, N = 4..64: the default multi-blade
+analysis against the Radau monodromy, wall time and peak memory, default BLAS threading beside
+one thread), the paper's Floquet method against the default, and a Campbell sweep.
 
 For N = 4, 8, 16 elements per blade (the paper's Table 1 turbine at 6.02 rad/s):
 
@@ -107,8 +109,104 @@ def name(key) -> str:
     return fam if sym is None else f"{idx}{'st' if idx == 1 else 'nd'} {sym[:4]}. {fam}"
 
 
+# ------------------------------------------------------------------------ any rotor
+def three_blades():
+    """Table 1 blades at 120 deg on a rigid, massless hub (inertias 1e-9), free yaw, the
+    paper's nacelle: isotropic, so time-invariant in multi-blade coordinates."""
+    import dataclasses as dc
+    P = load_turbine(None)
+    return dc.replace(P, rotor=dc.replace(P.rotor, blades=3),
+                      hub=dc.replace(P.hub, teeter=False, inertia_lateral=1e-9,
+                                     inertia_longitudinal=1e-9))
+
+
+def _case(spec: dict) -> dict:
+    """One analysis in this (child) process: wall time, peak RSS, the modes below the band."""
+    import resource
+    if spec.get("threads") is not None:
+        os.environ["HAWT_BLAS_THREADS"] = str(spec["threads"])
+    T = three_blades() if spec["turbine"] == "three" else load_turbine(None)
+    kw = dict(elements=spec["N"], method=spec["method"])
+    if spec["method"] == "auto":
+        kw["max_per_rev"] = spec["band"]
+    modal_analysis(T, elements=2, method=spec["method"])        # warm-up (imports, caches)
+    t0 = time.perf_counter()
+    r = modal_analysis(T, **kw)
+    wall = time.perf_counter() - t0
+    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0      # MB
+    band = spec["band"]
+    freq = lambda m: m.fixed_frame_per_rev if m.fixed_frame_per_rev is not None \
+        else m.frequency_per_rev
+    modes = [(m.family, m.symmetry, freq(m), m.real_per_rev) for m in r.modes
+             if freq(m) <= band]
+    return {"wall": wall, "rss_mb": rss, "modes": modes, "method": r.settings["method"],
+            "unknowns": r.model.n}
+
+
+def run_case(spec: dict) -> dict:
+    """_case in a fresh Python process (so that the peak memory is this analysis')."""
+    import json
+    import subprocess
+    env = dict(os.environ)
+    if spec.get("threads") is None:
+        env.pop("OPENBLAS_NUM_THREADS", None)
+        env.pop("OMP_NUM_THREADS", None)
+    out = subprocess.run([sys.executable, os.path.abspath(__file__), "--case", json.dumps(spec)],
+                         capture_output=True, text=True, env=env, timeout=3600)
+    if out.returncode:
+        raise RuntimeError(f"case {spec} failed: {out.stderr[-2000:]}")
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def rotors_benchmark(Ns, ref_Ns, band=10.0) -> None:
+    """Three blades + free yaw: the default analysis (multi-blade coordinates, one sparse
+    eigenproblem) against the Radau IIA monodromy with Fast Floquet over T/3 (the method of
+    the issue's measurements), wall time and peak memory in one process per case; the
+    default analysis also with the BLAS libraries' own threading (HAWT_BLAS_THREADS=0)."""
+    print(f"\nThree blades, rigid hub, free yaw (paper blades and nacelle), modes below {band:g} "
+          "per-rev; one process per analysis (peak RSS of that process)", flush=True)
+    hdr = (f"{'N':>3} {'unknowns':>8} | {'default [s]':>11} {'MB':>6} {'modes':>5} | "
+           f"{'default, BLAS own threads [s]':>29} | {'radau+fast [s]':>14} {'MB':>6} "
+           f"{'ratio':>7} {'max diff /rev':>13}")
+    print(hdr)
+    print("-" * len(hdr))
+    for N in Ns:
+        a = run_case({"turbine": "three", "N": N, "method": "auto", "band": band,
+                      "threads": 1})
+        b = run_case({"turbine": "three", "N": N, "method": "auto", "band": band,
+                      "threads": 0})
+        ref = ""
+        if N in ref_Ns:
+            c = run_case({"turbine": "three", "N": N, "method": "radau", "band": band,
+                          "threads": 1})
+            fa = np.sort([m[2] for m in a["modes"] if m[0] != "yaw"])
+            fc = np.sort([m[2] for m in c["modes"] if m[0] != "yaw"])
+            k = min(fa.size, fc.size)
+            diff = np.max(np.abs(fa[:k] - fc[:k])) if k else float("nan")
+            ref = (f"{c['wall']:>14.2f} {c['rss_mb']:>6.0f} {c['wall'] / a['wall']:>7.1f} "
+                   f"{diff:>13.1e}")
+        print(f"{N:>3} {a['unknowns']:>8} | {a['wall']:>11.2f} {a['rss_mb']:>6.0f} "
+              f"{len(a['modes']):>5} | {b['wall']:>29.2f} | {ref}", flush=True)
+    p = run_case({"turbine": "paper", "N": 4, "method": "auto", "band": 50.0, "threads": 1})
+    q = run_case({"turbine": "paper", "N": 4, "method": "auto", "band": 50.0, "threads": 0})
+    print(f"paper turbine (2 blades, teeter, free yaw), N = 4, default (Radau IIA 400 steps, "
+          f"Fast Floquet): {p['wall']:.2f} s, {p['rss_mb']:.0f} MB (BLAS own threads "
+          f"{q['wall']:.2f} s)")
+    print("(default: HAWT_BLAS_THREADS unset = 1 thread; 'BLAS own threads': "
+          "HAWT_BLAS_THREADS=0, OPENBLAS_NUM_THREADS unset)")
+
+
 def main(argv=None) -> int:
+    if argv is None and len(sys.argv) > 2 and sys.argv[1] == "--case":
+        import json
+        print(json.dumps(_case(json.loads(sys.argv[2]))))
+        return 0
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--rotors", default="4,8,16,32,64",
+                    help="elements per blade of the three-bladed rotor benchmark ('' skips)")
+    ap.add_argument("--rotors-reference", default="4,8,16,32",
+                    help="of those, the ones also run with the Radau monodromy")
+    ap.add_argument("--rotors-only", action="store_true")
     ap.add_argument("--elements", default="4,8,16")
     ap.add_argument("--speeds", type=int, default=30)
     ap.add_argument("--workers", type=int, default=2)
@@ -120,6 +218,11 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     global REPEAT
     REPEAT = args.repeat
+    if args.rotors:
+        rotors_benchmark([int(x) for x in args.rotors.split(",")],
+                         [int(x) for x in args.rotors_reference.split(",") if x])
+        if args.rotors_only:
+            return 0
     limit_blas_threads(1)
     tb = load_turbine(None)
     Ns = [int(x) for x in args.elements.split(",")]

@@ -141,10 +141,13 @@ class ModalResult:
 
     def table(self) -> str:
         s = self.settings
-        how = (f"{s['method']}, {s['steps']} steps/period{', fast Floquet' if s['fast'] else ''}"
-               if s["method"] in ("radau", "paper") else
-               f"Hill's method, {s.get('frame', 'rotating')} frame, "
-               f"{s.get('hill_harmonics', 0)} harmonics")
+        if s["method"] in ("radau", "paper"):
+            how = f"{s['method']}, {s['steps']} steps/period{', fast Floquet' if s['fast'] else ''}"
+        elif s.get("frame") == "multi-blade" and not s.get("hill_harmonics"):
+            how = "multi-blade coordinates, time-invariant: one eigenproblem"
+        else:
+            how = (f"Hill's method, {s.get('frame', 'rotating')} frame, "
+                   f"{s.get('hill_harmonics', 0)} harmonics")
         header = (f"Dominant frequencies of the turbine '{s['turbine']}' (Floquet, {how}), "
                   f"{s['elements']} elements per blade, rotor speed {s['rotor_speed']:.4g} rad/s")
         footer = []
