@@ -117,6 +117,38 @@ def hill_pencil(fc: FourierCoefficients, H: int):
     return Ah, Eh
 
 
+class _ShiftInvert:
+    """The eigenvalues of the pencil (A, E) nearest ``sigma``: ARPACK on (A - sigma E)^-1 E
+    with one sparse LU (counted in ``stats``, with the solves)."""
+
+    def __init__(self, A, E, sigma, stats: dict, what: str):
+        self.N = A.shape[0]
+        self.sigma = sigma
+        self.what = what
+        lu = spla.splu(sp.csc_matrix(A - sigma * E))
+        stats["factorizations"] = stats.get("factorizations", 0) + 1
+
+        def mv(x):
+            stats["solves"] = stats.get("solves", 0) + 1
+            return lu.solve(np.asarray(E @ x))
+        self.op = spla.LinearOperator((self.N, self.N), matvec=mv,
+                                      dtype=complex if np.iscomplexobj(sigma) else float)
+
+    def nearest(self, k: int):
+        """(lam, X) of the k eigenvalues nearest sigma (infinite ones excluded)."""
+        N = self.N
+        try:
+            mu, X = spla.eigs(self.op, k=k, which="LM", ncv=min(N - 1, max(2 * k + 1, 40)),
+                              tol=1e-13)
+        except spla.ArpackNoConvergence as err:
+            mu, X = err.eigenvalues, err.eigenvectors
+            if len(mu) < k // 2:
+                raise HillError(f"{self.what}: ARPACK did not converge for the {k} "
+                                f"eigenvalues nearest {self.sigma:.4g}") from err
+        ok = np.abs(mu) > 0
+        return self.sigma + 1.0 / mu[ok], X[:, ok]
+
+
 def _window_eigs(Ah, Eh, lo: float, hi: float, stats: dict, depth: int = 0):
     """Eigenpairs of the pencil (Ah, Eh) in the box lo <= Im <= hi, |Re| <= (hi - lo) / 2:
     ARPACK's k eigenvalues nearest the box centre, k doubled until the farthest of them lies
@@ -128,35 +160,17 @@ def _window_eigs(Ah, Eh, lo: float, hi: float, stats: dict, depth: int = 0):
     radius = math.sqrt(2.0) * r
     # a shift just off the imaginary axis: undamped modes (and a free angle's zero) are
     # never exactly at it
-    sigma = complex(-1e-3 * r, c)
-    lu = spla.splu(sp.csc_matrix(Ah - sigma * Eh))
-    stats["factorizations"] = stats.get("factorizations", 0) + 1
-
-    def mv(x):
-        stats["solves"] = stats.get("solves", 0) + 1
-        return lu.solve(np.asarray(Eh @ x))
-
-    op = spla.LinearOperator((N, N), matvec=mv, dtype=complex)
+    si = _ShiftInvert(Ah, Eh, complex(-1e-3 * r, c), stats,
+                      f"Hill's method in the band [{lo:.4g}, {hi:.4g}] rad/s")
     k = min(32, N - 2)
     while True:
-        try:
-            mu, X = spla.eigs(op, k=k, which="LM", ncv=min(N - 1, max(2 * k + 1, 40)),
-                              tol=1e-13)
-        except spla.ArpackNoConvergence as err:
-            mu, X = err.eigenvalues, err.eigenvectors
-            if len(mu) < k // 2:
-                raise HillError(f"Hill's method: ARPACK did not converge in the band "
-                                f"[{lo:.4g}, {hi:.4g}] rad/s") from err
-        ok = np.abs(mu) > 0
-        lam = sigma + 1.0 / mu[ok]
-        X = X[:, ok]
-        dist = np.abs(lam - sigma)
-        if (dist.size and dist.max() > radius) or k >= N - 2:
+        lam, X = si.nearest(k)
+        if (lam.size and np.abs(lam - si.sigma).max() > radius) or k >= N - 2:
             eps = 1e-9 * max(abs(lo), abs(hi), r)     # real exponents sit on Im = 0
             sel = (lam.imag >= lo - eps) & (lam.imag <= hi) & (np.abs(lam.real) <= r)
             return lam[sel], X[:, sel]
         if 2 * k > MAX_PER_WINDOW and depth < 8:
-            del lu
+            del si
             a = _window_eigs(Ah, Eh, lo, c, stats, depth + 1)
             b = _window_eigs(Ah, Eh, c, hi, stats, depth + 1)
             return np.concatenate([a[0], b[0]]), np.concatenate([a[1], b[1]], axis=1)
@@ -231,29 +245,11 @@ def _real_pencil_band(A, E, max_frequency: float, stats: dict):
         return refine_eigenpairs(A, E, lam[keep], X[:, keep])
     A = sp.csc_matrix(A.real)
     E = sp.csc_matrix(E.real)
-    sigma = -1e-3 * max_frequency
-    lu = spla.splu(sp.csc_matrix(A - sigma * E))
-    stats["factorizations"] = stats.get("factorizations", 0) + 1
-
-    def mv(x):
-        stats["solves"] = stats.get("solves", 0) + 1
-        return lu.solve(np.asarray(E @ x))
-
-    op = spla.LinearOperator((N, N), matvec=mv, dtype=float)
+    si = _ShiftInvert(A, E, -1e-3 * max_frequency, stats, "multi-blade eigenproblem")
     k = min(40, N - 2)
     while True:
-        try:
-            mu, X = spla.eigs(op, k=k, which="LM", ncv=min(N - 1, max(2 * k + 1, 40)),
-                              tol=1e-13)
-        except spla.ArpackNoConvergence as err:
-            mu, X = err.eigenvalues, err.eigenvectors
-            if len(mu) < k // 2:
-                raise HillError("multi-blade eigenproblem: ARPACK did not converge for the "
-                                f"{k} eigenvalues nearest {sigma:.3g}") from err
-        ok = np.abs(mu) > 0
-        lam = sigma + 1.0 / mu[ok]
-        X = X[:, ok]
-        if (lam.size and np.abs(lam - sigma).max() > max_frequency + abs(sigma)) \
+        lam, X = si.nearest(k)
+        if (lam.size and np.abs(lam - si.sigma).max() > max_frequency + abs(si.sigma)) \
                 or k >= N - 2:
             keep = (np.abs(lam) <= max_frequency) & (lam.imag >= -1e-9 * max_frequency)
             return refine_eigenpairs(A, E, lam[keep], X[:, keep])

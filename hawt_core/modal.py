@@ -309,8 +309,8 @@ def periodic_dae(model: TurbineModel, steady, check_symmetry: bool = True) -> Li
 def dynamic_dimension(dae: LinearPeriodicDAE) -> int:
     """Number of dynamic states (finite eigenvalues of the pencil at t = 0), found by exact
     deflation of the infinite eigenvalues (blade_modes.deflate_infinite): the dimension of the
-    consistent subspace, independent of t, given to the Floquet marching instead of a
-    numerical rank decision (which can depend on the step size for fine meshes)."""
+    consistent subspace.  O(n^3): the analyses use TurbineModel.dynamic_dimension (a count)
+    instead, which tests/test_assembly.py checks against this."""
     Ar, _, _ = deflate_infinite(dae.A(0.0).toarray(), dae.E(0.0).toarray())
     return int(Ar.shape[0])
 
@@ -450,7 +450,19 @@ def label_modes(model: TurbineModel, fl, columns) -> list:
 CLUSTER_TOL = 1e-7
 
 
-def separate_degenerate_modes(model: TurbineModel, fl, columns, rows) -> int:
+def _blade_vectors(model: TurbineModel):
+    """Per blade, the rows of its nodal u and theta (same local order for every blade), and
+    their weights (theta times the blade length: tip metres)."""
+    lay = model.layout
+    rows = [np.concatenate([lay.blade(k).u[1:].ravel(), lay.blade(k).theta[1:].ravel()])
+            for k in range(model.n_blades)]
+    b0 = lay.blade(0)
+    w = np.concatenate([np.ones(b0.u[1:].size),
+                        np.full(b0.theta[1:].size, model.turbine.blade.length)])
+    return rows, w
+
+
+def separate_degenerate_modes(model: TurbineModel, fl, columns) -> int:
     """Re-choose the basis of every cluster of equal exponents among ``columns`` so that each
     vector belongs to one blade symmetry class (returns how many clusters were changed).
 
@@ -465,12 +477,7 @@ def separate_degenerate_modes(model: TurbineModel, fl, columns, rows) -> int:
     nb = model.n_blades
     if nb < 2 or len(columns) < 2:
         return 0
-    lay = model.layout
-    pos = {int(r): j for j, r in enumerate(fl.sample_rows)}
-    blade_rows = [np.concatenate([lay.blade(k).u[1:].ravel(), lay.blade(k).theta[1:].ravel()])
-                  for k in range(nb)]
-    L = model.turbine.blade.length
-    w = np.concatenate([np.ones(lay.blade(0).u[1:].size), np.full(lay.blade(0).theta[1:].size, L)])
+    blade_rows, w = _blade_vectors(model)
     cols = sorted((int(c) for c in columns), key=lambda c: (fl.exponents[c].imag,
                                                               fl.exponents[c].real))
     omega = fl.omega
@@ -600,16 +607,10 @@ def _blade_symmetry(model: TurbineModel, fl, i: int, eta: complex):
     if nb < 2:
         return None, None
     pos = {int(r): j for j, r in enumerate(fl.sample_rows)}
-    lay = model.layout
-    blades = []
-    for k in range(nb):
-        b = lay.blade(k)
-        r = np.concatenate([b.u[1:].ravel(), b.theta[1:].ravel()])
-        if any(int(x) not in pos for x in r):
-            return None, None
-        blades.append([pos[int(x)] for x in r])
-    L = model.turbine.blade.length
-    w = np.concatenate([np.ones(lay.blade(0).u[1:].size), np.full(lay.blade(0).theta[1:].size, L)])
+    rows, w = _blade_vectors(model)
+    if any(int(x) not in pos for r in rows for x in r):
+        return None, None
+    blades = [[pos[int(x)] for x in r] for r in rows]
     P = fl.periodic_sample(i)
     eta0 = complex(fl.exponents[i])
     flip = eta.imag * eta0.imag < 0 or (eta.imag == 0 and eta0.imag != 0 and
@@ -702,7 +703,7 @@ def _monodromy_modes(model: TurbineModel, dae: LinearPeriodicDAE, method: str, s
                 setattr(m, name, value)
             m.column = int(a)
     else:
-        separate_degenerate_modes(model, fl, resolved, rows)
+        separate_degenerate_modes(model, fl, resolved)
         modes = label_modes(model, fl, resolved)
     return fl, modes, unresolved, limit
 
@@ -847,7 +848,7 @@ def _modal_analysis(turbine, elements, rotor_speed, steps, method, fast, harmoni
         fl, hm = _hill_floquet(model, mbc if mbc is not None else dae,
                                transform if mbc is not None else None, limit, rows, wts, d)
         use_fast, steps = False, None
-        separate_degenerate_modes(model, fl, fl.modes(), rows)
+        separate_degenerate_modes(model, fl, fl.modes())
         modes = label_modes(model, fl, fl.modes())
         unresolved = max(0, d - int(fl.exponents.size))     # above the band
         extra = {"frame": frame, "hill_harmonics": hm.harmonics,

@@ -223,3 +223,20 @@ def test_coupling_jacobians_equal_plain_complex_step(turbine):
     for key in ("y_cols", "ydot_cols", "y_rows"):
         assert np.abs(cm[key][0] - c[key]).max() <= 1e-14 * scale
         assert np.abs(cm[key][1] - c7[key]).max() <= 1e-14 * scale
+
+
+@pytest.mark.parametrize("turbine", [VARIANTS[0], VARIANTS[2], VARIANTS[3], VARIANTS[5]])
+def test_dynamic_dimension_count_equals_exact_deflation(turbine):
+    """TurbineModel.dynamic_dimension (two states per rigid coordinate and per flexible
+    section direction of every element) equals the number of finite eigenvalues found by
+    exact deflation of the linearized pencil (modal.dynamic_dimension, O(n^3)): exact, for
+    rigid-axial blades, 3 blades, and flexible towers (with flexible-EA blades below)."""
+    from hawt_core.modal import dynamic_dimension, periodic_dae
+    from hawt_core.periodic import periodic_steady_state
+    m = TurbineModel(turbine, elements=3)
+    dae = periodic_dae(m, periodic_steady_state(m))
+    assert m.dynamic_dimension() == dynamic_dimension(dae)
+    flex = dc.replace(turbine, blade=dc.replace(turbine.blade, sections=dc.replace(
+        turbine.blade.sections, ea=np.full(2, 5e9))))
+    m = TurbineModel(flex, elements=3)
+    assert m.dynamic_dimension() == dynamic_dimension(periodic_dae(m, periodic_steady_state(m)))
