@@ -14,7 +14,9 @@ import time
 
 import numpy as np
 
-from hawt_core.blade_modes import (SPARSE_THRESHOLD, SpinningBlade, finite_modes,
+from hawt_core.analyses.blade_modes import SPARSE_THRESHOLD
+from hawt_core.assembly import SpinningBlade
+from hawt_core.numerics.pencil import (finite_modes,
                                    frequency_bound, sparse_modes)
 from hawt_core.model import Beam, Hub, Nacelle, Rotor, SectionTable, Turbine
 

@@ -38,10 +38,10 @@ import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 
-from hawt_core.campbell import campbell  # noqa: E402
-from hawt_core.threads import limit_blas_threads  # noqa: E402
+from hawt_core.analyses.campbell import campbell  # noqa: E402
+from hawt_core.numerics.threads import limit_blas_threads  # noqa: E402
 from hawt_core.io import load_turbine  # noqa: E402
-from hawt_core.modal import modal_analysis  # noqa: E402
+from hawt_core.analyses.modal import modal_analysis  # noqa: E402
 
 FAMILIES = ("flap", "lag", "torsion")
 SYMMETRIES = ("symmetric", "antisymmetric")

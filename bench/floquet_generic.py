@@ -16,7 +16,7 @@ import time
 import numpy as np
 import scipy.sparse as sp
 
-from hawt_core.floquet import LinearPeriodicDAE, floquet_analysis
+from hawt_core.solvers.floquet import LinearPeriodicDAE, floquet_analysis
 
 
 def chain_rotor(N=4, blades=2, omega=1.0, eps=0.2, hub=True, rigid=True, damping=0.01,

@@ -18,7 +18,7 @@ import pstats
 
 from hawt_core.assembly import TurbineModel
 from hawt_core.model import Beam, Hub, Nacelle, Rotor, SectionTable, Turbine
-from hawt_core.simulate import Simulator
+from hawt_core.solvers.march import Simulator
 
 SEC = SectionTable.uniform(mass=67.5772, i1=5, i2=1e-4, i3=4.9999, gj=21.8e3, ei2=4.36e6,
                            ei3=21.8e6)

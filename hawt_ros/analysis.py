@@ -262,7 +262,7 @@ class AnalysisRunner:
         ctx = multiprocessing.get_context("forkserver")
         ctx.set_forkserver_preload(["__main__", "hawt_ros.analysis", "hawt_ros.backend",
                                     "numpy", "scipy.sparse", "scipy.linalg",
-                                    "hawt_core.assembly"])
+                                    "hawt_core.assembly", "hawt_core.analyses.modal"])
         from multiprocessing import forkserver
 
         forkserver.ensure_running()

@@ -1,6 +1,6 @@
 """Where the node gets its simulation and modal analysis from (no rclpy import).
 
-Normally ``hawt_core.simulate`` (Simulator, SimulationError) and ``hawt_core.modal``
+Normally ``hawt_core.solvers.march`` (Simulator, SimulationError) and ``hawt_core.analyses.modal``
 (modal_analysis, Cancelled). For tests only, the environment variable ``HAWT_ROS_FAKE`` may
 name a Python file (or module) providing stand-ins with the same API; ``HAWT_ROS_FAKE_PARTS``
 (comma separated, default ``simulate,modal``) says which parts it replaces. The analysis
@@ -45,8 +45,8 @@ def _fake_parts() -> set:
 
 
 #: part -> (module, (entry point, exception class))
-_PARTS = {"simulate": ("hawt_core.simulate", ("Simulator", "SimulationError")),
-          "modal": ("hawt_core.modal", ("modal_analysis", "Cancelled"))}
+_PARTS = {"simulate": ("hawt_core.solvers.march", ("Simulator", "SimulationError")),
+          "modal": ("hawt_core.analyses.modal", ("modal_analysis", "Cancelled"))}
 
 
 def load_backend(part: str) -> SimpleNamespace:

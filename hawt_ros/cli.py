@@ -2,9 +2,9 @@
 ``call`` and ``echo`` (the ``ros2 bag`` / ``ros2 service call`` / ``ros2 topic echo`` a
 PyPI-only ROS 2 installation lacks, for hawt's needs).
 
-hawt_core/cli.py dispatches ``hawt <one of these> ...`` here, importing this module only then;
-this module itself imports rclpy only inside the commands that talk to ROS (``hawt info``
-works with the MCAP libraries alone).
+``hawt`` finds these through the entry-point group ``hawt.commands`` (hawt_ros/commands.py,
+which imports this module only when one of them runs); this module itself imports rclpy only
+inside the commands that talk to ROS (``hawt info`` works with the MCAP libraries alone).
 
     hawt record run.mcap [--topics /joint_states ...] [--duration S]
     hawt play run.mcap [--rate R] [--loop] [--wait-for-subscribers S]
@@ -26,26 +26,12 @@ from typing import Any, Dict, List, Optional
 __all__ = ["COMMANDS", "build_parser", "main", "message_to_plain", "modes_to_json",
            "format_modes_table"]
 
-#: name -> one-line help (hawt_core/cli.py lists these in ``hawt --help``).
-COMMANDS = {
-    "record": "record live ROS 2 topics into an MCAP file (rosbag2 layout)",
-    "play": "republish the messages of an MCAP file with their original timing",
-    "info": "summarize an MCAP file (topics, types, counts, duration)",
-    "call": "call the hawt node's modal_analysis service (or action) and print the modes",
-    "echo": "print the messages arriving on a ROS 2 topic",
-}
-EXIT_USAGE = 2
+from hawt_core.cli.parser import EXIT_USAGE, CliError, Parser
+
+from .commands import HELP as COMMANDS
+
 EXIT_FAIL = 1
 DEFAULT_IGNORED = ("/rosout", "/parameter_events")
-
-
-class CliError(Exception):
-    """A user error: one line on stderr, exit status 2."""
-
-
-class _Parser(argparse.ArgumentParser):
-    def error(self, message):
-        raise CliError(f"{self.prog}: {message}")
 
 
 # ============================================================================ helpers
@@ -100,7 +86,7 @@ def modes_to_json(response) -> Dict[str, Any]:
 
 def format_modes_table(response) -> str:
     """The modes of a response as a table like ``hawt modes`` prints."""
-    from hawt_core.modal import format_table
+    from hawt_core.results.tables import format_table
     st = response.settings
     header = (f"Dominant frequencies of the turbine '{st.turbine}' (Floquet, {st.method}, "
               f"{st.steps} steps/period), {st.elements} elements per blade, rotor speed "
@@ -547,8 +533,8 @@ _RUN = {"record": (cmd_record, _record_args), "play": (cmd_play, _play_args),
 
 
 def build_parser(prog: str = "hawt") -> argparse.ArgumentParser:
-    parser = _Parser(prog=prog, description="ROS 2 tools of hawt")
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    parser = Parser(prog=prog, description="ROS 2 tools of hawt")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
     for name, help_text in COMMANDS.items():
         p = sub.add_parser(name, help=help_text, description=help_text)
         _RUN[name][1](p)

@@ -575,7 +575,7 @@ class HawtNode(Node):
         steps = rs.get("steps", req.steps if req else None)
         if steps is None:
             try:
-                from hawt_core.modal import DEFAULT_STEPS
+                from hawt_core.analyses.modal import DEFAULT_STEPS
                 steps = DEFAULT_STEPS.get(req.method if req else "auto", 0)
             except Exception:  # noqa: BLE001
                 steps = 0

@@ -19,26 +19,14 @@ __all__ = [
     "PERTURB_NAMES", "MARKER_FRAMES", "MAX_ELEMENTS", "MAX_STEPS", "ANALYSIS_METHODS",
 ]
 
-#: Names the ``perturb`` parameter may set (initial offsets of the rigid-body states).
-PERTURB_NAMES = ("yaw", "yaw_rate", "teeter", "teeter_rate")
+from hawt_core.analyses.modal import MAX_ELEMENTS, MAX_STEPS, MIN_STEPS
+from hawt_core.analyses.modal import METHODS as ANALYSIS_METHODS
+from hawt_core.analyses.modal import validate_request as _validate_analysis
+from hawt_core.solvers.march import PERTURBABLE as PERTURB_NAMES
+from hawt_core.solvers.march import parse_perturb as _parse_perturb
+
 #: Frames the blade markers may be expressed in.
 MARKER_FRAMES = ("nacelle", "hub")
-#: Largest element count accepted (simulation and analysis).
-MAX_ELEMENTS = 64
-#: Largest number of marching steps per period accepted by the analysis requests.
-MAX_STEPS = 1_000_000
-#: Integration methods of the Floquet analysis (hawt_core.modal.METHODS when available).
-try:  # hawt_core is pure NumPy/SciPy: importing it here is cheap and rclpy-free
-    from hawt_core.modal import METHODS as ANALYSIS_METHODS  # type: ignore
-except Exception:  # pragma: no cover - modal.py not available
-    ANALYSIS_METHODS = ("auto", "radau", "paper", "hill")
-try:
-    from hawt_core.modal import MAX_STEPS as _CORE_MAX_STEPS  # type: ignore
-    MAX_STEPS = min(MAX_STEPS, int(_CORE_MAX_STEPS))
-except Exception:  # pragma: no cover
-    pass
-#: Smallest number of steps per period the analysis accepts.
-MIN_STEPS = 8
 
 
 class ParameterError(ValueError):
@@ -101,35 +89,15 @@ def _number(name: str, v: Any, allowed: str) -> float:
 
 
 def parse_perturb(text: Any) -> Dict[str, float]:
-    """``"teeter=0.02,yaw_rate=0.01"`` -> ``{"teeter": 0.02, "yaw_rate": 0.01}``.
-
-    Separators: commas, semicolons or blanks. Names from :data:`PERTURB_NAMES`, values finite
-    numbers (rad, rad/s)."""
-    allowed = (f"need 'name=value' pairs separated by commas with names from "
-               f"{', '.join(PERTURB_NAMES)} and finite values, e.g. 'teeter=0.02,yaw_rate=0.01'")
-    if text is None:
-        return {}
-    if not isinstance(text, str):
-        raise ParameterError("perturb", text, allowed)
-    out: Dict[str, float] = {}
-    for item in text.replace(";", ",").replace(" ", ",").split(","):
-        item = item.strip()
-        if not item:
-            continue
-        name, sep, value = item.partition("=")
-        name = name.strip()
-        if not sep or name not in PERTURB_NAMES:
-            raise ParameterError("perturb", text, allowed + f" (bad item {item!r})")
-        try:
-            x = float(value)
-        except ValueError:
-            raise ParameterError("perturb", text, allowed + f" (bad value in {item!r})") from None
-        if not math.isfinite(x):
-            raise ParameterError("perturb", text, allowed + f" (bad value in {item!r})")
-        if name in out:
-            raise ParameterError("perturb", text, allowed + f" ({name} given twice)")
-        out[name] = x
-    return out
+    """``"teeter=0.02,yaw_rate=0.01"`` -> ``{"teeter": 0.02, "yaw_rate": 0.01}`` (the
+    simulator's parser, hawt_core.solvers.march.parse_perturb; its error as a ParameterError)."""
+    try:
+        return _parse_perturb(text)
+    except ValueError as e:
+        raise ParameterError("perturb", text,
+                             f"need 'name=value' pairs separated by commas with names from "
+                             f"{', '.join(PERTURB_NAMES)} and finite values, e.g. "
+                             f"'teeter=0.02,yaw_rate=0.01' ({str(e).split(': ', 1)[-1]})") from None
 
 
 #: numeric parameters: (lower bound, lower bound allowed, upper bound, what is allowed)
@@ -206,23 +174,30 @@ def validate_request(rotor_speed: Any = 0.0, elements: Any = 0, steps: Any = 0,
 
     Conventions of hawt_msgs/srv/ModalAnalysis: ``rotor_speed`` 0 = the turbine's nominal
     speed (negative, NaN or infinite: rejected); ``elements`` 0 = the node's default;
-    ``steps`` 0 = the method's default; ``method`` '' = 'auto'."""
-    allowed = "need a finite number > 0 [rad/s], or 0 = the turbine's nominal speed"
-    if _number("rotor_speed", rotor_speed, allowed) < 0:
-        raise ParameterError("rotor_speed", rotor_speed, allowed)
-    if float(rotor_speed) > 1000:
-        raise ParameterError("rotor_speed", rotor_speed, "need at most 1000 rad/s")
-    if not _is_int(elements) or not 0 <= elements <= MAX_ELEMENTS:
-        raise ParameterError("elements", elements,
-                             f"need an integer from 1 to {MAX_ELEMENTS}, or 0 = the node's default")
-    if not _is_int(steps) or not (steps == 0 or MIN_STEPS <= steps <= MAX_STEPS):
-        raise ParameterError("steps", steps, f"need an integer from {MIN_STEPS} to {MAX_STEPS}, "
-                                             "or 0 = the method's default")
-    if not isinstance(method, str) or (method and method not in ANALYSIS_METHODS):
-        raise ParameterError("method", method,
-                             f"choose one of {', '.join(ANALYSIS_METHODS)}, or '' = {default_method}")
-    el = int(elements) if elements else (default_elements or None)
-    return AnalysisRequest(elements=el,
-                           rotor_speed=float(rotor_speed) if rotor_speed else None,
-                           steps=int(steps) if steps else None,
-                           method=method or default_method)
+    ``steps`` 0 = the method's default; ``method`` '' = 'auto'. The limits are the
+    analysis' own (hawt_core.analyses.modal.validate_request); the node adds the
+    conventions for 0 and '' to what is allowed."""
+    allowed = {
+        "rotor_speed": "need a finite number > 0 and <= 1000 [rad/s], or 0 = the turbine's "
+                       "nominal speed",
+        "elements": f"need an integer from 1 to {MAX_ELEMENTS}, or 0 = the node's default",
+        "steps": f"need an integer from {MIN_STEPS} to {MAX_STEPS}, or 0 = the method's default",
+        "method": f"choose one of {', '.join(ANALYSIS_METHODS)}, or '' = {default_method}"}
+    given = {"rotor_speed": rotor_speed, "elements": elements, "steps": steps, "method": method}
+    for name, zero_ok in (("rotor_speed", _is_number), ("elements", _is_int), ("steps", _is_int)):
+        if not zero_ok(given[name]):
+            raise ParameterError(name, given[name], allowed[name])
+    if not isinstance(method, str):
+        raise ParameterError("method", method, allowed["method"])
+    if not (math.isfinite(float(rotor_speed)) and 0 <= rotor_speed <= 1000):
+        raise ParameterError("rotor_speed", rotor_speed, allowed["rotor_speed"])
+    request = AnalysisRequest(elements=int(elements) if elements else (default_elements or None),
+                              rotor_speed=float(rotor_speed) if rotor_speed else None,
+                              steps=int(steps) if steps else None,
+                              method=method or default_method)
+    try:
+        _validate_analysis(**request.as_kwargs())
+    except ValueError as e:
+        name = str(e).split(":", 1)[0]
+        raise ParameterError(name, given.get(name), allowed.get(name, str(e))) from None
+    return request

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from hawt_core.blade_modes import blade_modes
+from hawt_core.analyses.blade_modes import blade_modes
 
 MESHES = (8, 16, 32)
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import functools
 
 from hawt_core.io import load_turbine
-from hawt_core.modal import modal_analysis
+from hawt_core.analyses.modal import modal_analysis
 
 
 @functools.lru_cache(maxsize=None)

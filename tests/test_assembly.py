@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from hawt_core.assembly import TurbineModel
+from hawt_core.solvers.steady import constant_steady_state, is_time_invariant_at
 from hawt_core.io import load_turbine
 from hawt_core.model import Beam, Gravity, SectionTable
 from tower_turbines import soft_tower_turbine
@@ -143,12 +144,12 @@ def test_steady_state_root_tension_and_time_invariance():
     tension m Omega0^2 (e l + l^2/2) = 123930.9 N on both blades (closed form, 1e-9)."""
     T = load_turbine()
     m = TurbineModel(T, elements=4)
-    y = m.steady_state()
+    y = constant_steady_state(m)
     ref = 67.5772 * 6.02 ** 2 * (1.8 * 8.42 + 8.42 ** 2 / 2)
     for k in range(2):
         assert y[m.layout.blade(k).root_force[0]] == pytest.approx(ref, rel=1e-9)
         assert np.abs(y[m.layout.blade(k).u[1:]]).max() < 1e-12
-    assert m.is_time_invariant_at(y)
+    assert is_time_invariant_at(m, y)
 
 
 @pytest.mark.parametrize("speed", [3.99, 4.0, 6.02, 8.0])
@@ -157,7 +158,7 @@ def test_steady_state_with_the_ignorable_yaw_angle(speed):
     Newton matrix is singular). The bordered Newton steps converge at every speed (4.0 rad/s
     used to diverge) and leave the yaw angle at 0 exactly; residual below 1e-9 of the loads."""
     m = TurbineModel(load_turbine(), elements=2, rotor_speed=speed)
-    y = m.steady_state()
+    y = constant_steady_state(m)
     assert y[m.layout["yaw"]] == 0.0
     scale = np.abs(m.residual(np.zeros(m.n), m.initial_guess(), 0.0)).max()
     assert np.abs(m.residual(np.zeros(m.n), y, 0.3)).max() <= 1e-9 * scale
@@ -167,7 +168,7 @@ def test_periodic_steady_state_free_yaw_gravity():
     """Gravity and a free yaw: the periodic steady state by harmonic balance; the harmonics
     are raised until the residual BETWEEN the collocation times is below 1e-8 of the loads
     (an independent check of the interpolated solution); yaw angle 0 at t = 0."""
-    from hawt_core.periodic import periodic_steady_state
+    from hawt_core.solvers.periodic import periodic_steady_state
     T = load_turbine()
     m = TurbineModel(dc.replace(T, gravity=Gravity(True, 9.81)), elements=2)
     ps = periodic_steady_state(m, harmonics=8)
@@ -231,8 +232,8 @@ def test_dynamic_dimension_count_equals_exact_deflation(turbine):
     section direction of every element) equals the number of finite eigenvalues found by
     exact deflation of the linearized pencil (modal.dynamic_dimension, O(n^3)): exact, for
     rigid-axial blades, 3 blades, and flexible towers (with flexible-EA blades below)."""
-    from hawt_core.modal import dynamic_dimension, periodic_dae
-    from hawt_core.periodic import periodic_steady_state
+    from hawt_core.analyses.modal import dynamic_dimension, periodic_dae
+    from hawt_core.solvers.periodic import periodic_steady_state
     m = TurbineModel(turbine, elements=3)
     dae = periodic_dae(m, periodic_steady_state(m))
     assert m.dynamic_dimension() == dynamic_dimension(dae)

@@ -13,10 +13,10 @@ import numpy as np
 import scipy.linalg as sl
 from scipy.optimize import brentq
 
-from hawt_core.blade_modes import blade_modes
+from hawt_core.analyses.blade_modes import blade_modes
 from hawt_core.fem.beam import BeamElements
 from hawt_core.fem.sections import mesh_beam
-from hawt_core.jacobian import (ColouredJacobian, block_tridiagonal_pattern,
+from hawt_core.numerics.jacobian import (ColouredJacobian, block_tridiagonal_pattern,
                                 dense_complex_step)
 from hawt_core.model import Beam, Hub, Nacelle, Rotor, SectionTable, Turbine
 from mesh_study import MESHES, by_family, mesh_study, richardson, solve

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from hawt_core.fem.beam import (F_, M_, OM_, ROOT_F, ROOT_M, ROOT_OM, ROOT_SIZE, ROOT_V, TH_,
-                                U_, V_, BLOCK_SIZE, BeamElements, cross, q_apply, rot_apply,
-                                rot_T_apply)
+                                U_, V_, BLOCK_SIZE, BeamElements)
+from hawt_core.numerics.rotations import cross, q_apply, rot_apply, rot_T_apply
 from hawt_core.fem.sections import mesh_beam
 from hawt_core.model import Beam, SectionTable
 

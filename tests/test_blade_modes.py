@@ -14,7 +14,9 @@ import numpy as np
 import pytest
 
 from hawt_core import cli
-from hawt_core.blade_modes import blade_modes, frequency_bound, SpinningBlade
+from hawt_core.analyses.blade_modes import blade_modes
+from hawt_core.assembly import SpinningBlade
+from hawt_core.fem.energy import frequency_bound
 from hawt_core.model import Beam, Hub, Nacelle, Rotor, SectionTable, Turbine
 from mesh_study import mesh_study, richardson
 from paper_tables import TABLE2, TABLE2_PRINTED
@@ -307,10 +309,10 @@ def test_root_moment_of_a_blade_under_gravity_with_a_mass_centre_offset():
     on its clamp are F0 = m L g and M0 = m L (L/2 b1 + xi) x g; the xi x g part is the gravity
     moment of the offset (a sign error there flips the torsion moment).  Tolerance 1e-6
     relative (Newton, deflection ~1e-7 of the arms)."""
-    from hawt_core.blade_modes import newton
+    from hawt_core.numerics.newton import newton
     from hawt_core.fem.beam import BeamElements
     from hawt_core.fem.sections import mesh_beam
-    from hawt_core.jacobian import ColouredJacobian, block_tridiagonal_pattern
+    from hawt_core.numerics.jacobian import ColouredJacobian, block_tridiagonal_pattern
     x2, x3 = 0.15, -0.08
     sec = dict(TABLE1)
     for k in ("gj", "ei2", "ei3"):

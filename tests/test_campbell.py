@@ -13,13 +13,14 @@ import csv
 import numpy as np
 import pytest
 
-from hawt_core.blade_modes import blade_modes
-from hawt_core.campbell import (CSV_COLUMNS, campbell, campbell_point, check_speeds,
+from hawt_core.analyses.blade_modes import blade_modes
+from hawt_core.results.campbell import CSV_COLUMNS
+from hawt_core.analyses.campbell import (campbell, campbell_point, check_speeds,
                                 track_modes)
 from hawt_core.cli import main
 from hawt_core.io import load_turbine
-from hawt_core.modal import modal_analysis
-from hawt_core.plotting import mode_file_stem, plot_turbine_modes, table2_modes
+from hawt_core.analyses.modal import modal_analysis
+from hawt_core.results.plotting import mode_file_stem, plot_turbine_modes, table2_modes
 
 ELEMENTS = 2
 STEPS = 128
@@ -112,7 +113,7 @@ def test_tracks_keep_first_speed_labels(threaded, direct):
     starts there (no mode appears later at N = 2, 128 steps), and the MAC of each assignment
     is >= 0.2 (the acceptance threshold)."""
     assert len(threaded.tracks) == len(direct[SPEEDS[0]].modes)
-    from hawt_core.plotting import mode_label
+    from hawt_core.results.plotting import mode_label
     assert [t.label for t in threaded.tracks] == [mode_label(m) for m in direct[SPEEDS[0]].modes]
     for t in threaded.tracks:
         assert t.present().all()
@@ -205,7 +206,7 @@ def test_mode_snapshot_amplitudes(direct):
     """Reference: the 1st symmetric flap mode moves the blades only (no yaw, no teeter:
     the paper's Fig. 1); the drawn rigid angles are below 1e-6 of the largest blade
     deflection (tip-metre units)."""
-    from hawt_core.plotting import mode_snapshots
+    from hawt_core.results.plotting import mode_snapshots
     res = direct[SPEEDS[1]]
     m = res.find("flap", "symmetric", 1)
     t, ph, X = mode_snapshots(res, m)
@@ -274,7 +275,7 @@ def test_unwrap_harmonics_restores_continuity():
     """Reference: a smooth track f(w) = 2.0 + 0.1 w [Hz] whose dominant per-rev value jumps
     by +2 and -1 per-rev at two speeds (the Floquet integer-per-rev ambiguity); the shifts
     undo the jumps exactly and leave the first value and absent points alone."""
-    from hawt_core.campbell import unwrap_harmonics
+    from hawt_core.analyses.campbell import unwrap_harmonics
     w = np.linspace(3.0, 9.0, 7)
     hz = 2.0 + 0.1 * w
     pr = hz * 2 * np.pi / w
@@ -313,14 +314,14 @@ def test_failed_speed_is_skipped(turbine, monkeypatch):
     """Reference: an analysis that raises at one speed (patched modal_analysis, thread pool)
     leaves that speed without modes, with its error message, and the other speeds intact;
     errors='raise' re-raises it (exact)."""
-    import hawt_core.modal as modal
-    real = modal.modal_analysis
+    import hawt_core.analyses.campbell as campbell_module
+    real = campbell_module.modal_analysis
 
     def flaky(turbine, rotor_speed=None, **kw):
         if rotor_speed == 5.5:
             raise RuntimeError("steady state: Newton did not converge (test)")
         return real(turbine, rotor_speed=rotor_speed, **kw)
-    monkeypatch.setattr(modal, "modal_analysis", flaky)
+    monkeypatch.setattr(campbell_module, "modal_analysis", flaky)
     with cf.ThreadPoolExecutor(max_workers=2) as pool:
         res = campbell(turbine, [5.0, 5.5, 6.0], elements=1, steps=64, executor=pool)
         assert [w for w, _ in res.failed] == [5.5]
@@ -338,7 +339,7 @@ def test_harmonic_mac_invariance():
     gives MAC 1 to 1e-12; a re-indexing by 1 is not tried for two blades (MAC < 0.5 for
     random coefficients), and without harmonics the plain MAC is used (exact 1 for a
     phase-rotated vector)."""
-    from hawt_core.campbell import _mac_matrix
+    from hawt_core.analyses.campbell import _mac_matrix
     rng = np.random.default_rng(0)
     K, m = 4, 12
     C = np.zeros((2 * K + 1, m), complex)
@@ -431,7 +432,7 @@ def test_real_pairs_are_twins_and_drawn_once(wide_sweep, tmp_path, monkeypatch):
 def test_labels_are_spread_apart():
     """_spread keeps the order, separates the labels by at least the gap, stays in bounds
     and moves nothing that did not overlap."""
-    from hawt_core.plotting import _spread
+    from hawt_core.results.plotting import _spread
     y = np.array([1.0, 1.01, 1.02, 5.0, 9.99, 10.0])
     z = _spread(y, 0.2, 0.0, 10.0)
     assert np.all(np.diff(z[np.argsort(y)]) >= 0.2 - 1e-12)

@@ -18,7 +18,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 from scipy.integrate import solve_ivp
 
-from hawt_core.floquet import LinearPeriodicDAE, floquet_analysis, monodromy
+from hawt_core.solvers.floquet import LinearPeriodicDAE, floquet_analysis, monodromy
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), os.pardir, "bench"))
 from floquet_generic import chain_rotor  # noqa: E402
@@ -447,7 +447,7 @@ def test_lowrank_stage_update_on_the_turbine(monkeypatch):
     ordering by 6e-9 .. 4e-8 at N = 4."""
     import functools
 
-    import hawt_core.modal as modal
+    import hawt_core.analyses.modal as modal
     from hawt_core.io import load_turbine
 
     tb = load_turbine()
@@ -481,7 +481,7 @@ def test_weights_decide_the_dominant_harmonic():
     (so units do not decide).  A solution whose row A is harmonic 0 (amplitude 1) and row B
     harmonic 2 (amplitude 3): weights (100, 1) report the exponent's own frequency (energy 100
     against 9), weights (1, 1) report it 2 per-rev higher (9 against 1); exact."""
-    from hawt_core.floquet import periodic_modes
+    from hawt_core.solvers.floquet import periodic_modes
     T, M = 2 * math.pi, 64
     t = np.arange(M) * T / M
     eta0 = complex(-0.01, 0.3)

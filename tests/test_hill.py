@@ -8,14 +8,13 @@
   period and with Fast Floquet (T/2 and the blade relabelling); the same labels.
 """
 import dataclasses as dc
-import math
 
 import numpy as np
 import pytest
 
-from hawt_core.hill import hill_modes, hill_pencil
+from hawt_core.solvers.hill import hill_modes, hill_pencil
 from hawt_core.io import load_turbine
-from hawt_core.modal import modal_analysis
+from hawt_core.analyses.modal import modal_analysis
 from test_floquet import SYSTEMS
 
 

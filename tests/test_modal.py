@@ -10,9 +10,10 @@ import numpy as np
 import pytest
 
 from hawt_core.assembly import TurbineModel
-from hawt_core.blade_modes import finite_modes
+from hawt_core.solvers.steady import constant_steady_state
+from hawt_core.numerics.pencil import finite_modes
 from hawt_core.io import load_turbine
-from hawt_core.modal import Cancelled, modal_analysis, validate_request
+from hawt_core.analyses.modal import Cancelled, modal_analysis, validate_request
 from paper_tables import TABLE2, TEETER_REAL_PER_REV
 from shared_results import paper_modal_analysis
 
@@ -79,7 +80,7 @@ def test_floquet_equals_eigenvalues_when_time_invariant(paper):
     locked = dc.replace(paper, nacelle=dc.replace(paper.nacelle, yaw_free=False))
     r = modal_analysis(locked, elements=4, steps=400)
     m = TurbineModel(locked, elements=4)
-    E, A = m.linearize(m.steady_state())
+    E, A = m.linearize(constant_steady_state(m))
     lam, _ = finite_modes(A.toarray(), E.toarray(), 1e4 * m.rotor_speed)
     ref = np.sort(lam.imag / m.rotor_speed)
     ref = ref[ref < 20]
@@ -107,7 +108,7 @@ def test_symmetric_modes_equal_single_blade(paper, result4):
     """Symmetric modes load the hub with equal and opposite loads (paper): they equal the
     single clamped blade's modes (hawt_core.blade_modes, an independent eigen-analysis)
     to 1e-6 relative (the temporal error of 400 Radau IIA steps at 34/rev)."""
-    from hawt_core.blade_modes import blade_modes
+    from hawt_core.analyses.blade_modes import blade_modes
     single = blade_modes(paper, 4)
     for fam in ("flap", "lag", "torsion"):
         for k in (1, 2):

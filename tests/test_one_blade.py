@@ -14,10 +14,10 @@ import numpy as np
 import pytest
 
 from hawt_core.assembly import TurbineModel
-from hawt_core.blade_modes import ConvergenceError
+from hawt_core.numerics.newton import ConvergenceError
 from hawt_core.io import load_turbine
-from hawt_core.modal import modal_analysis
-from hawt_core.periodic import periodic_steady_state
+from hawt_core.analyses.modal import modal_analysis
+from hawt_core.solvers.periodic import periodic_steady_state
 
 PAPER = load_turbine()
 #: first moment of the Table 1 blade about the shaft axis, m (e l + l^2 / 2) [kg m]

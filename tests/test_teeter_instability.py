@@ -9,8 +9,8 @@ import pytest
 
 from hawt_core.assembly import TurbineModel
 from hawt_core.io import load_turbine
-from hawt_core.modal import modal_analysis
-from hawt_core.simulate import Simulator
+from hawt_core.analyses.modal import modal_analysis
+from hawt_core.solvers.march import Simulator
 
 
 def test_simulated_yaw_teeter_divergence_grows_at_the_floquet_rate():
@@ -72,7 +72,7 @@ def _rigid_rotor_dae(turbine):
     teeter axis), the nacelle's own yaw inertia unchanged; linearized by complex step."""
     import scipy.sparse as sp
 
-    from hawt_core.floquet import LinearPeriodicDAE
+    from hawt_core.solvers.floquet import LinearPeriodicDAE
     from hawt_core.rigid import RigidSystem
     r = RigidSystem(turbine)
     sec, L, e = turbine.blade.sections, turbine.blade.length, turbine.hub.radius
@@ -107,7 +107,7 @@ def test_stiff_blades_give_the_rigid_rotor_teeter_divergence():
     to 1e-6 relative (measured 5e-8; the residual blade flexibility scales as 1/stiffness):
     the divergence is a rigid-body phenomenon of the free yaw and the teetering two-bladed
     rotor, whose inertia about the fixed axes varies at 2/rev."""
-    from hawt_core.floquet import floquet_analysis
+    from hawt_core.solvers.floquet import floquet_analysis
     P = load_turbine()
     s = P.blade.sections
     stiff = dc.replace(P, blade=dc.replace(P.blade, sections=dc.replace(

@@ -27,12 +27,10 @@ All arithmetic is complex-safe (complex-step Jacobians).
 """
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 
-if TYPE_CHECKING:  # a run-time import would be circular: sections uses rigid.kane's rot1
-    from .sections import ElementProperties
+from ..numerics.rotations import LEVI_CIVITA_9, dot
+from .sections import ElementProperties
 
 #: Offsets inside the per-element block of 18 unknowns.
 F_, M_, U_, TH_, V_, OM_ = (slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12),
@@ -40,50 +38,6 @@ F_, M_, U_, TH_, V_, OM_ = (slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12),
 ROOT_F, ROOT_M, ROOT_V, ROOT_OM = slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12)
 ROOT_SIZE, BLOCK_SIZE = 12, 18
 _I1, _I2 = np.array([1, 2, 0]), np.array([2, 0, 1])
-
-
-def cross(a, b):
-    """Cross product on the last axis (complex-safe, faster than np.cross for small arrays)."""
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], -1)
-
-
-def dot(a, b):
-    """Dot product on the last axis with broadcasting (einsum: ~3x faster than
-    ``(a * b).sum(-1)``, whose reduction over a length-3 axis is slow)."""
-    return np.einsum("...i,...i->...", a, b)
-
-
-def _levi_civita_9() -> np.ndarray:
-    eps = np.zeros((3, 3, 3))
-    for i, j, k in ((0, 1, 2), (1, 2, 0), (2, 0, 1)):
-        eps[i, j, k], eps[i, k, j] = 1.0, -1.0
-    return np.ascontiguousarray(eps.transpose(1, 2, 0).reshape(9, 3))
-
-
-#: (9, 3) Levi-Civita table: ``cross(a, b)_i = sum_jk eps_ijk a_j b_k``, i.e. the outer
-#: product (a_j b_k) flattened over (j, k), times this (one small matmul per cross product)
-LEVI_CIVITA_9 = _levi_civita_9()
-
-
-def rot_T_apply(theta, a):
-    """``C(theta)^T a`` for Rodrigues parameters theta (..., 3)."""
-    s = 0.25 * dot(theta, theta)
-    return (((1 - s)[..., None] * a + cross(theta, a)
-             + 0.5 * theta * dot(theta, a)[..., None]) / (1 + s)[..., None])
-
-
-def rot_apply(theta, a):
-    """``C(theta) a`` (b components -> B components)."""
-    s = 0.25 * dot(theta, theta)
-    return (((1 - s)[..., None] * a - cross(theta, a)
-             + 0.5 * theta * dot(theta, a)[..., None]) / (1 + s)[..., None])
-
-
-def q_apply(theta, a):
-    """``Q(theta) a = (I + theta~/2 + theta theta^T/4) a``."""
-    return a + 0.5 * cross(theta, a) + 0.25 * theta * dot(theta, a)[..., None]
 
 
 class BeamElements:

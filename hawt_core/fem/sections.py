@@ -19,16 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model import Beam, SectionTable
-from ..rigid.kane import rot1
-
-
-def skew(a: np.ndarray) -> np.ndarray:
-    """Skew matrices of vectors ``a`` (..., 3) -> (..., 3, 3), with ``skew(a) @ b = a x b``."""
-    a = np.asarray(a)
-    z = np.zeros_like(a[..., 0])
-    return np.stack([np.stack([z, -a[..., 2], a[..., 1]], -1),
-                     np.stack([a[..., 2], z, -a[..., 0]], -1),
-                     np.stack([-a[..., 1], a[..., 0], z], -1)], -2)
+from ..numerics.rotations import rot1, skew
 
 
 def station_compliance(t: SectionTable) -> np.ndarray:

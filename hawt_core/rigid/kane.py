@@ -76,60 +76,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..fem.beam import LEVI_CIVITA_9, dot as _dot
+from ..numerics.rotations import cross as _cross, dot as _dot, matvec as _mv, rot1, rot2, rot3
+from ..numerics.rotations import tip_basis
 
-__all__ = ["RigidSystem", "rot1", "rot2", "rot3", "tip_basis"]
-
-
-def tip_basis(theta) -> np.ndarray:
-    """``C(theta)^T``: columns = the deformed section basis B in the undeformed basis b, for
-    Rodrigues parameters theta (complex-safe; the transpose of the beam's C)."""
-    th = np.asarray(theta)
-    s = 0.25 * (th @ th)
-    sk = np.array([[0.0 * s, -th[2], th[1]], [th[2], 0.0 * s, -th[0]], [-th[1], th[0], 0.0 * s]])
-    return ((1 - s) * np.eye(3) + sk + 0.5 * np.outer(th, th)) / (1 + s)
-
-
-def _cross(a, b):
-    """Cross product on the last axis with broadcasting (complex-safe): the outer product
-    contracted with the Levi-Civita tensor, one matmul (for 3-vectors several times faster
-    than np.cross, which dominates the cost of this module otherwise)."""
-    p = np.asarray(a)[..., :, None] * np.asarray(b)[..., None, :]
-    return p.reshape(p.shape[:-2] + (9,)) @ LEVI_CIVITA_9
-
-
-def _mv(M, v):
-    """Matrix (..., 3, 3) times vector (..., 3) with broadcasting."""
-    return (M @ v[..., None])[..., 0]
-
-
-def _rotation(axis: int, a) -> np.ndarray:
-    """Rotation matrices (a.shape + (3, 3)) for an angle or an array of angles."""
-    c = np.cos(a)
-    s = np.sin(a)
-    R = np.zeros(np.shape(c) + (3, 3), dtype=np.result_type(c, float))
-    i, j = ((1, 2), (2, 0), (0, 1))[axis]      # the plane turned, right-handed about axis
-    R[..., axis, axis] = 1.0
-    R[..., i, i] = c
-    R[..., j, j] = c
-    R[..., i, j] = -s
-    R[..., j, i] = s
-    return R
-
-
-def rot1(a) -> np.ndarray:
-    """Right-handed rotation by ``a`` about axis 1; columns = turned basis in the old one."""
-    return _rotation(0, a)
-
-
-def rot2(a) -> np.ndarray:
-    """Right-handed rotation by ``a`` about axis 2; columns = turned basis in the old one."""
-    return _rotation(1, a)
-
-
-def rot3(a) -> np.ndarray:
-    """Right-handed rotation by ``a`` about axis 3; columns = turned basis in the old one."""
-    return _rotation(2, a)
+__all__ = ["RigidSystem"]
 
 
 class RigidSystem:

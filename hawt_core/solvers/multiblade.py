@@ -38,7 +38,7 @@ from typing import Optional
 import numpy as np
 import scipy.sparse as sp
 
-from .floquet import LinearPeriodicDAE
+from .floquet import LinearPeriodicDAE, dominant_harmonic
 
 #: Names of the multi-blade coordinates: "collective", "cos1", "sin1", ..., "differential".
 WHIRLS = ("collective", "forward", "backward", "differential")
@@ -229,7 +229,6 @@ def fixed_frame_modes(transform: MultiBladeTransform, fl, specs: dict) -> dict:
     ``eta + i k Omega0``, and the mean of ``q(t) e^{-i k Omega0 t}`` the fixed-frame amplitudes
     whose blade part gives the whirl (per-blade energies of the collective, forward,
     backward and differential parts; the largest names it)."""
-    from .floquet import _dominant_harmonic
     pos = {int(r): j for j, r in enumerate(fl.sample_rows)}
     nb = transform.blades
     orders = transform.orders
@@ -258,7 +257,7 @@ def fixed_frame_modes(transform: MultiBladeTransform, fl, specs: dict) -> dict:
             wf[groups[:, j]] *= coord_w[j]
         energy = (np.abs(C) ** 2) @ wf
         eta = complex(fl.exponents[int(c)])
-        k = kk[_dominant_harmonic(energy, kk, eta.imag, w0, tie=1e-9)]
+        k = kk[dominant_harmonic(energy, kk, eta.imag, w0, tie=1e-9)]
         eta_f = eta + 1j * k * w0
         amp = C[k % M]                                          # fixed-frame amplitudes
         ww = np.array([wmap.get(int(r), 0.0) for r in rows]) ** 2

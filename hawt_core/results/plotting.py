@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .modal import _ordinal
+from .tables import ordinal
 
 
 def _pyplot():
@@ -73,7 +73,7 @@ def mode_label(mode) -> str:
     """'1st antisymmetric flap', 'teeter', 'yaw 2', ... (the paper's figure captions)."""
     if mode.family in ("yaw", "teeter") or not mode.symmetry:
         return mode.family if mode.index == 1 else f"{mode.family} {mode.index}"
-    return f"{_ordinal(mode.index)} {mode.symmetry} {mode.family}"
+    return f"{ordinal(mode.index)} {mode.symmetry} {mode.family}"
 
 
 def mode_file_stem(position: int, mode) -> str:
@@ -223,8 +223,7 @@ def mode_snapshots(result, mode, instants: int = MODE_INSTANTS):
     pj = np.exp(1j * np.outer(tj, k) * omega0) @ c             # (J, n) periodic part
     xj = pj * np.exp(1j * eta.imag * tj)[:, None]
     # the phase: largest displacement-like entry (tip metres) real at t = 0
-    from .modal import _display_rows
-    rows, wts = _display_rows(model)
+    rows, wts = model.display_rows()
     z = xj[0, rows] * wts
     i = int(np.argmax(np.abs(z)))
     if abs(z[i]) > 0:

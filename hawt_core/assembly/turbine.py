@@ -18,127 +18,19 @@ loads it exerts on the tower top) are the tower's tip loads (docs/rigid-bodies.m
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Optional
 
 import numpy as np
 import scipy.sparse as sp
 
-from .blade_modes import ConvergenceError, newton
-from .fem.beam import BLOCK_SIZE, ROOT_SIZE, BeamElements, F_, M_, OM_, TH_, U_, V_
-from .fem.sections import mesh_beam
-from .jacobian import STEP, ColouredJacobian, block_tridiagonal_pattern
-from .model import Turbine
-from .rigid import RigidSystem
+from ..fem.beam import BeamElements
+from ..fem.sections import mesh_beam
+from ..model import Turbine
+from ..numerics.jacobian import STEP, ColouredJacobian, block_tridiagonal_pattern
+from ..rigid import RigidSystem
+from .layout import StateLayout
 
-
-@dataclass(frozen=True)
-class BladeLayout:
-    """Index arrays of one blade's unknowns in the turbine state vector.
-
-    ``u``, ``theta``: (N+1, 3), row 0 is -1 (clamped root, not an unknown);
-    ``V``, ``Omega``: (N+1, 3); ``F``, ``M``: (N, 3); ``root_force``, ``root_moment``: (3,).
-    """
-
-    u: np.ndarray
-    theta: np.ndarray
-    V: np.ndarray
-    Omega: np.ndarray
-    F: np.ndarray
-    M: np.ndarray
-    root_force: np.ndarray
-    root_moment: np.ndarray
-
-
-class StateLayout:
-    """Names for the turbine state vector: ``layout["teeter"]`` (an int index),
-    ``layout.blade(k)`` (a BladeLayout), ``layout.names()`` (one name per unknown)."""
-
-    def __init__(self, rigid: RigidSystem, n_blades: int, beam: BeamElements,
-                 tower: Optional[BeamElements] = None):
-        self.rigid_names = tuple(rigid.coordinates) + tuple(rigid.speeds)
-        self.n_rigid = len(self.rigid_names)
-        self.n_blades = n_blades
-        self.n_beam = beam.n
-        self.N = beam.N
-        self.n = self.n_rigid + n_blades * beam.n
-        #: offset of the tower unknowns (after the blades), None for a rigid tower
-        self.tower_offset = self.n if tower is not None else None
-        self.n_tower = tower.n if tower is not None else 0
-        self.N_tower = tower.N if tower is not None else 0
-        self.n += self.n_tower
-        self._index = {name: i for i, name in enumerate(self.rigid_names)}
-        if "teeter_speed" in self._index:   # the name simulate's perturbations use
-            self._index["teeter_rate"] = self._index["teeter_speed"]
-        self._blades = [self._blade_layout(k) for k in range(n_blades)]
-        self._tower = (self._blade_layout(None) if tower is not None else None)
-
-    @property
-    def has_tower(self) -> bool:
-        return self._tower is not None
-
-    def tower(self) -> BladeLayout:
-        """Index arrays of the flexible tower's unknowns (BladeLayout fields; ``u``,
-        ``theta`` in the inertial tower root frame t: t1 up, t2 lateral, t3 downwind;
-        ``root_force``/``root_moment``: the loads the tower exerts on the ground)."""
-        if self._tower is None:
-            raise ValueError("tower: this turbine's tower is rigid (no tower unknowns)")
-        return self._tower
-
-    def _blade_layout(self, k) -> BladeLayout:
-        if k is None:   # the tower
-            off, N = self.tower_offset, self.N_tower
-        else:
-            off, N = self.blade_offset(k), self.N
-        blk = off + ROOT_SIZE + np.arange(N * BLOCK_SIZE).reshape(N, BLOCK_SIZE)
-        neg = -np.ones((1, 3), int)
-        return BladeLayout(
-            u=np.concatenate([neg, blk[:, U_]]), theta=np.concatenate([neg, blk[:, TH_]]),
-            V=np.concatenate([off + 6 + np.arange(3)[None], blk[:, V_]]),
-            Omega=np.concatenate([off + 9 + np.arange(3)[None], blk[:, OM_]]),
-            F=blk[:, F_], M=blk[:, M_], root_force=off + np.arange(3),
-            root_moment=off + 3 + np.arange(3))
-
-    def blade_offset(self, k: int) -> int:
-        return self.n_rigid + k * self.n_beam
-
-    def blade(self, k: int) -> BladeLayout:
-        if not 0 <= k < self.n_blades:
-            raise IndexError(f"blade: {k} is not allowed; this turbine has blades 0..{self.n_blades - 1}")
-        return self._blades[k]
-
-    def __contains__(self, name: str) -> bool:
-        return name in self._index
-
-    def __getitem__(self, name: str) -> int:
-        try:
-            return self._index[name]
-        except KeyError:
-            raise KeyError(f"state name: {name!r} is not in this model; available: "
-                           f"{sorted(self._index)}") from None
-
-    def names(self) -> list:
-        out = list(self.rigid_names)
-        for k in range(self.n_blades):
-            out += self._beam_names(self._blades[k], self.blade_offset(k), self.n_beam,
-                                    f"blade{k}")
-        if self._tower is not None:
-            out += self._beam_names(self._tower, self.tower_offset, self.n_tower, "tower")
-        return out
-
-    @staticmethod
-    def _beam_names(bl, off, n, prefix):
-        loc = [""] * n
-        for field in ("u", "theta", "V", "Omega", "F", "M"):
-            for i, row in enumerate(getattr(bl, field)):
-                for c, j in enumerate(row):
-                    if j >= 0:
-                        lbl = f"{field}[{i + (field in ('F', 'M'))}]"
-                        loc[j - off] = f"{prefix}.{lbl}.{c + 1}"
-        for c in range(3):
-            loc[c] = f"{prefix}.root_force.{c + 1}"
-            loc[3 + c] = f"{prefix}.root_moment.{c + 1}"
-        return loc
+__all__ = ["TurbineModel"]
 
 
 class TurbineModel:
@@ -503,40 +395,34 @@ class TurbineModel:
             y[off:off + self.beam.n] = self.beam.rigid_body_state(np.real(v[k]), np.real(w[k]))
         return y  # a flexible tower starts at rest, undeformed (zeros)
 
-    def is_time_invariant_at(self, y, times=None, tol=1e-9) -> bool:
-        """True when ``R(0, y, t)`` stays zero over a revolution (a constant steady state)."""
-        times = np.linspace(0, self.period, 7)[:-1] if times is None else times
-        z = np.zeros(self.n)
-        scale = max(1.0, np.abs(self.residual(z, self.initial_guess(), 0.0)).max())
-        return all(np.abs(self.residual(z, y, t)).max() <= tol * scale for t in times)
-
-    @staticmethod
-    def ignorable_columns(J, rtol=1e-12) -> np.ndarray:
-        """Columns of dR/dy that vanish (to round-off relative to the largest entry): the
-        ignorable coordinates, e.g. a free yaw angle without a spring."""
-        colmax = np.abs(sp.csc_matrix(J)).max(axis=0).toarray().ravel()
-        return np.flatnonzero(colmax <= rtol * max(colmax.max(initial=0.0), 1e-300))
-
-    def steady_state(self, tol=1e-10) -> np.ndarray:
-        """The steady state, constant in the rotating frame (no gravity, symmetric rotor).
-
-        Ignorable coordinates (a free yaw angle: its column of dR/dy is zero) are held at
-        their initial value. Raises ConvergenceError if Newton fails, and ValueError if the
-        steady state is periodic rather than constant.
-        """
-        z = np.zeros(self.n)
-        fun = lambda y: self.residual(z, y, 0.0)
-        y0 = self.initial_guess()
-        J0 = self.jacobians(z, y0, 0.0)[0]
-        # Newton's first step is at y0 again: reuse J0 there
-        jac = lambda y: J0 if np.array_equal(y, y0) else self.jacobians(z, y, 0.0)[0]
-        ignorable = self.ignorable_columns(J0)
-        y, _ = newton(fun, jac, y0, tol=tol, what="turbine steady state", fixed=ignorable)
-        if not self.is_time_invariant_at(y):
-            raise ValueError("steady state: this configuration (gravity, tilt or an asymmetric "
-                             "rotor) has a periodic steady state, not a constant one; use the "
-                             "periodic steady-state solver")
-        return y
+    def display_rows(self):
+        """Indices and weights of displacement-like unknowns (units: metres of motion): rigid
+        rotations times the rotor radius; blade displacements; blade bending slopes (theta2,
+        theta3) times the blade length (the tip metres they cause); the twist theta1 times the
+        sections' torsional radius of gyration sqrt(i1 / m) (the metres its mass moves: a twist
+        times the blade length would outweigh a flap deflection by the span-to-chord ratio, and
+        a torsion sideband would then name a flap mode's frequency); the tower's displacements
+        and its rotations times the rotor radius."""
+        lay = self.layout
+        R = self.turbine.hub.radius + self.turbine.blade.length
+        L = self.turbine.blade.length
+        sec = self.turbine.blade.sections
+        r_g = float(np.sqrt(np.mean(sec.i1) / np.mean(sec.mass)))
+        idx, wts = [], []
+        for name in ("yaw", "teeter"):
+            if name in lay:
+                idx.append(lay[name]), wts.append(R)
+        for k in range(self.n_blades):
+            b = lay.blade(k)
+            u, th = b.u[1:].ravel(), b.theta[1:].ravel()
+            idx += u.tolist() + th.tolist()
+            wts += [1.0] * len(u) + [r_g, L, L] * (len(th) // 3)
+        if lay.has_tower:   # tower displacements [m] and rotations (rotor radius: tip metres)
+            tl = lay.tower()
+            u, th = tl.u[1:].ravel(), tl.theta[1:].ravel()
+            idx += u.tolist() + th.tolist()
+            wts += [1.0] * len(u) + [R] * len(th)
+        return np.array(idx), np.array(wts)
 
     # ------------------------------------------------------------------ symmetry
     def blade_relabelling(self) -> sp.csr_matrix:

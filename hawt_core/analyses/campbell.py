@@ -37,48 +37,52 @@ free yaw angle's double zero) share a frequency: the plot draws it once (both da
 from __future__ import annotations
 
 import concurrent.futures as cf
-import csv
 import math
 import os
 import time
-from dataclasses import dataclass, field
 from typing import Callable, Optional, Sequence
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from .model import Turbine
+from ..model import Turbine
+from ..numerics.mac import mac_matrix
+from ..results.campbell import FRAMES, CampbellResult, Track
+from ..results.plotting import mode_label
+from .modal import (DEFAULT_MAX_PER_REV, DEFAULT_STEPS, MAX_STEPS, STEPS_PER_CYCLE,
+                    modal_analysis, validate_request)
+
+__all__ = ["campbell", "campbell_point", "track_modes", "unwrap_harmonics", "check_speeds"]
+
 
 #: Weight of the relative frequency change (after the harmonic re-indexing found by the MAC)
 #: in the assignment cost.
 FREQUENCY_WEIGHT = 0.2
+
 #: Below this MAC, an assignment is refused (the mode starts a new track).
 MIN_MAC = 0.2
+
 #: A vector matched with a MAC below this does not become the track's reference vector.
 KEEP_MAC = 0.95
+
 #: Largest relative frequency change accepted between a track's consecutive points.
 MAX_JUMP = 0.3
 
-CSV_COLUMNS = ("speed_rad_s", "speed_rpm", "track", "family", "symmetry", "index",
-               "frequency_per_rev", "frequency_hz", "real_per_rev", "damping_ratio", "mac",
-               "harmonic_shift", "continuous_hz", "fixed_frame_per_rev", "fixed_frame_hz",
-               "fixed_frame_damping_ratio", "whirl", "frame")
 #: Fragments of at most this many points are merged into a track that misses those speeds.
 FRAGMENT_POINTS = 3
+
 #: A fragment continues a track when its frequency, re-indexed by up to FRAGMENT_SHIFT whole
 #: per-rev, is within FRAGMENT_TOL (relative) of the track's interpolated (or extrapolated)
 #: frequency there (near a coincidence of two multipliers, e.g. a lag mode 4 per-rev below a
 #: torsion mode, the mixed vector takes the other family's harmonic)
 FRAGMENT_TOL = 0.03
+
 FRAGMENT_SHIFT = 8
-FRAMES = ("fixed", "rotating")
-
-
-
 
 # ---------------------------------------------------------------------------- work unit
 #: Harmonics -K..K of the periodic eigenvectors kept for tracking.
 TRACK_HARMONICS = 4
+
 #: Largest harmonic re-indexing tried when comparing two modes (per-rev).
 MAX_HARMONIC_SHIFT = 3
 
@@ -112,7 +116,6 @@ def campbell_point(task: dict) -> dict:
     coefficients of the periodic eigenvectors on the same rows) or None, "settings", "unresolved", "compute_time", "warnings" (the
     analysis' warning messages, collected instead of printed), "pid"}``.
     """
-    from .modal import _display_rows, modal_analysis
     pid = os.getpid()
     import warnings
     with warnings.catch_warnings(record=True) as caught:
@@ -126,13 +129,12 @@ def campbell_point(task: dict) -> dict:
         res.modes = [m for m in res.modes if (m.fixed_frame_hz if fixed and m.fixed_frame_hz
                                               is not None else m.frequency_hz) <= band]
     messages = list(dict.fromkeys(f"{w.category.__name__}: {w.message}" for w in caught))
-    rows, wts = _display_rows(res.model)
+    rows, wts = res.model.display_rows()
     fl = res.floquet
     X = fl.eigenvectors
     cols = [m.column for m in res.modes]
     vectors = X[rows][:, cols] * wts[:, None] if cols else np.zeros((len(rows), 0), complex)
     harmonics = _harmonic_coefficients(fl, rows, wts, cols)
-    from .plotting import mode_label
     modes = []
     for m in res.modes:
         d = m.to_dict()
@@ -143,152 +145,6 @@ def campbell_point(task: dict) -> dict:
             "settings": dict(res.settings),
             "unresolved": int(res.unresolved), "compute_time": float(res.compute_time),
             "warnings": messages, "pid": pid}
-
-
-# ---------------------------------------------------------------------------- result
-@dataclass
-class Track:
-    """One mode followed over the speeds; arrays have one entry per speed (NaN where the mode
-    was not found, e.g. above the band at that speed).  ``frequency_*``, ``real_per_rev``,
-    ``damping_ratio``: the mode's dominant (rotating-frame for blade modes) values;
-    ``fixed_frame_*``: the fixed-frame ones (three or more blades; NaN otherwise)."""
-
-    label: str
-    family: str
-    symmetry: Optional[str]
-    index: int
-    frequency_per_rev: np.ndarray
-    frequency_hz: np.ndarray
-    real_per_rev: np.ndarray
-    damping_ratio: np.ndarray
-    mac: np.ndarray = field(repr=False)
-    #: integer per-rev added to the dominant frequency for a continuous curve (the harmonic
-    #: re-indexing found by the MAC, or :func:`unwrap_harmonics`); NaN where absent
-    shift: np.ndarray = field(repr=False)
-    #: frequency_per_rev + shift, and the same in Hz (continuous_per_rev times the speed in
-    #: rev/s): the rotating-frame curve of the Campbell plot and table
-    continuous_per_rev: np.ndarray = field(repr=False)
-    continuous_hz: np.ndarray = field(repr=False)
-    fixed_frame_per_rev: Optional[np.ndarray] = field(default=None, repr=False)
-    fixed_frame_hz: Optional[np.ndarray] = field(default=None, repr=False)
-    fixed_frame_damping_ratio: Optional[np.ndarray] = field(default=None, repr=False)
-    #: fixed-frame curve (fixed_frame_per_rev + shift, in Hz)
-    fixed_continuous_hz: Optional[np.ndarray] = field(default=None, repr=False)
-    whirl: Optional[str] = None
-    #: label of the other member of a real exponent pair with the same frequency (the plot
-    #: draws that frequency once); None otherwise
-    twin: Optional[str] = None
-
-    def present(self) -> np.ndarray:
-        return np.isfinite(self.frequency_hz)
-
-    def hz(self, frame: str = "rotating") -> np.ndarray:
-        """The continuous frequency [Hz] in ``frame`` ("fixed" needs fixed-frame values)."""
-        if frame == "fixed":
-            if self.fixed_continuous_hz is None:
-                raise ValueError("frame: 'fixed' is not allowed for this rotor (fewer than "
-                                 "three blades); use 'rotating'")
-            return self.fixed_continuous_hz
-        return self.continuous_hz
-
-    def damping(self, frame: str = "rotating") -> np.ndarray:
-        """Damping ratios in ``frame`` (they differ where the frequencies do)."""
-        if frame == "fixed":
-            return self.fixed_frame_damping_ratio
-        return self.damping_ratio
-
-
-@dataclass
-class CampbellResult:
-    """Result of :func:`campbell`: ``speeds`` [rad/s] ascending, ``tracks`` (Track list in the
-    order of their first-speed frequencies), ``points`` (the raw per-speed outputs),
-    ``frame`` ("fixed" or "rotating": what the table and plot show)."""
-
-    speeds: np.ndarray
-    tracks: list
-    points: list = field(repr=False)
-    settings: dict = field(default_factory=dict)
-    compute_time: float = 0.0
-    frame: str = "rotating"
-
-    @property
-    def failed(self) -> list:
-        """(speed, error message) of the speeds whose analysis failed."""
-        return [(p["speed"], p["error"]) for p in self.points if p.get("error")]
-
-    @property
-    def rpm(self) -> np.ndarray:
-        return self.speeds * 60.0 / (2.0 * np.pi)
-
-    def track(self, label: str) -> Track:
-        for t in self.tracks:
-            if t.label == label:
-                return t
-        raise KeyError(f"campbell: no track labelled {label!r}")
-
-    def rows(self) -> list:
-        """One dict per (speed, track) where the track has a mode, in speed order."""
-        out = []
-        nan = float("nan")
-        for i, (w, n) in enumerate(zip(self.speeds, self.rpm)):
-            for t in self.tracks:
-                if not np.isfinite(t.frequency_hz[i]):
-                    continue
-                fixed = t.fixed_frame_hz is not None
-                out.append({"speed_rad_s": float(w), "speed_rpm": float(n), "track": t.label,
-                            "family": t.family, "symmetry": t.symmetry or "",
-                            "index": t.index,
-                            "frequency_per_rev": float(t.frequency_per_rev[i]),
-                            "frequency_hz": float(t.frequency_hz[i]),
-                            "real_per_rev": float(t.real_per_rev[i]),
-                            "damping_ratio": float(t.damping_ratio[i]),
-                            "mac": float(t.mac[i]), "harmonic_shift": int(t.shift[i]),
-                            "continuous_hz": float(t.continuous_hz[i]),
-                            "fixed_frame_per_rev": float(t.fixed_frame_per_rev[i]) if fixed else nan,
-                            "fixed_frame_hz": float(t.fixed_continuous_hz[i]) if fixed else nan,
-                            "fixed_frame_damping_ratio":
-                                float(t.fixed_frame_damping_ratio[i]) if fixed else nan,
-                            "whirl": t.whirl or "", "frame": self.frame})
-        return out
-
-    def to_csv(self, path) -> str:
-        """Write the CSV (header + one row per speed and track); returns the path."""
-        with open(path, "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=list(CSV_COLUMNS))
-            w.writeheader()
-            for r in self.rows():
-                w.writerow({k: (f"{v:.12g}" if isinstance(v, float) else v) for k, v in r.items()})
-        return str(path)
-
-    def plot(self, path, max_hz: Optional[float] = None, tracks="table2",
-             frame: Optional[str] = None):
-        """Campbell diagram (frequency [Hz] vs rotor speed [rpm], 1P..nP rays) and the damping
-        ratios, to a PNG file; ``tracks``: "table2" (default), "all" or a list of labels;
-        ``frame``: "fixed" or "rotating" (default: the result's)."""
-        from .plotting import plot_campbell
-        return plot_campbell(self, path, max_hz=max_hz, tracks=tracks,
-                             frame=frame or self.frame)
-
-    def table(self) -> str:
-        """The frequencies [Hz] the plot draws (the continuous ones, in the result's frame)."""
-        lines = [f"Campbell diagram of '{self.settings.get('turbine', '')}': "
-                 f"{len(self.speeds)} speeds, {self.settings.get('elements')} elements, "
-                 f"{self.settings.get('method')}; {self.frame}-frame frequencies [Hz]"]
-        head = f"{'rad/s':>8}{'rpm':>8} " + "".join(f"{t.label[:14]:>15}" for t in self.tracks)
-        lines.append(head)
-        curves = [t.hz(self.frame) for t in self.tracks]
-        for i, (w, n) in enumerate(zip(self.speeds, self.rpm)):
-            vals = "".join(f"{c[i]:>15.4f}" if np.isfinite(c[i]) else f"{'-':>15}"
-                           for c in curves)
-            lines.append(f"{w:>8.3f}{n:>8.2f} {vals}")
-        for w, msg in self.failed:
-            lines.append(f"analysis failed at {w:.4g} rad/s: {msg}")
-        warned = [f"{p['speed']:.4g}" for p in self.points if p.get("warnings")]
-        if warned:
-            lines.append(f"warnings from the Floquet analysis at {len(warned)} speed(s) "
-                         f"({', '.join(warned)} rad/s): see points[i]['warnings']")
-        lines.append(f"computed in {self.compute_time:.2f} s")
-        return "\n".join(lines)
 
 
 # ---------------------------------------------------------------------------- tracking
@@ -318,7 +174,7 @@ def _mac_shift(A, B, max_shift, step):
             continue
         a = A[max(0, -s):H - max(0, s)]
         b = B[max(0, s):H - max(0, -s)]
-        val = np.abs(np.einsum("kmp,kmq->pq", np.conj(a), b)) ** 2 / den
+        val = mac_matrix(a.reshape(-1, a.shape[-1]), b.reshape(-1, b.shape[-1]), den=den)
         better = val > best * (1 + 1e-9)
         best = np.where(better, val, best)
         arg = np.where(better, s, arg)
@@ -588,8 +444,6 @@ def campbell(turbine: Turbine, speeds, elements: Optional[int] = None,
     state that does not converge): that point gets no modes and an ``"error"`` message
     (``CampbellResult.failed``); if every speed fails the first error is raised.  "raise"
     raises the first failure."""
-    from .modal import DEFAULT_MAX_PER_REV, DEFAULT_STEPS, MAX_STEPS, STEPS_PER_CYCLE
-    from .modal import validate_request
     if errors not in ("skip", "raise"):
         raise ValueError(f"errors: {errors!r} is not allowed; use 'skip' or 'raise'")
     blades = int(turbine.rotor.blades)

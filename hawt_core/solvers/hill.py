@@ -34,7 +34,8 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .floquet import FourierCoefficients, LinearPeriodicDAE, _dominant_harmonic
+from ..numerics.pencil import finite_modes, refine_eigenpairs
+from .floquet import FourierCoefficients, LinearPeriodicDAE, dominant_harmonic
 
 #: Largest eigenvalue count asked of ARPACK in one window before the window is halved.
 MAX_PER_WINDOW = 96
@@ -199,44 +200,11 @@ def _band_eigs(Ah, Eh, hi: float, width: float, stats: dict):
             np.concatenate([p[1] for p in parts], axis=1))
 
 
-def refine_eigenpairs(A, E, lam: np.ndarray, X: np.ndarray, iterations: int = 3):
-    """Inverse iteration on the sparse pencil (A, E) at each eigenvalue estimate (one sparse
-    LU per eigenvalue, ``iterations`` solves), then the least-squares Rayleigh quotient
-    ``lam = (Ex)^H A x / |Ex|^2``.  Shift-invert Arnoldi and QZ leave errors of ~1e-8 to
-    1e-6 relative in some eigenvalues of these index-3 pencils (the nilpotent part of
-    (A - sigma E)^-1 E pollutes the Krylov space; QZ rounds in the deflated dense pencil);
-    two or three steps bring them to round-off."""
-    A = sp.csc_matrix(A)
-    E = sp.csc_matrix(E)
-    lam = np.array(lam, complex)
-    X = np.array(X, complex)
-    for i in range(lam.size):
-        mu = lam[i] * (1 + 1e-10)              # near, not at, the eigenvalue
-        try:
-            lu = spla.splu(sp.csc_matrix(A - mu * E, dtype=complex))
-        except RuntimeError:            # exactly singular: the estimate is exact
-            continue
-        x = X[:, i] / max(np.linalg.norm(X[:, i]), 1e-300)
-        for _ in range(iterations):
-            y = lu.solve(np.asarray(E @ x, complex))
-            nrm = np.linalg.norm(y)
-            if not np.isfinite(nrm) or nrm == 0:
-                break
-            x = y / nrm
-        Ex = E @ x
-        den = np.vdot(Ex, Ex)
-        if abs(den) > 0:
-            lam[i] = np.vdot(Ex, A @ x) / den
-            X[:, i] = x
-    return lam, X
-
-
 def _real_pencil_band(A, E, max_frequency: float, stats: dict):
     """Finite eigenpairs of a real pencil with |eta| <= max_frequency, Im >= 0: dense
     (deflation of the infinite eigenvalues + QZ) for small systems, otherwise real
     shift-invert ARPACK about a small negative shift, k doubled until the farthest
     eigenvalue found lies beyond the band."""
-    from .blade_modes import finite_modes
     N = A.shape[0]
     if N <= DENSE_SIZE:
         stats["factorizations"] = stats.get("factorizations", 0) + 1
@@ -311,7 +279,7 @@ def hill_modes(dae: LinearPeriodicDAE, max_frequency: float, harmonics: Optional
         keep, tails = [], []
         for i in range(lam.size):
             e = energy[:, i]
-            if H and kk[_dominant_harmonic(e, kk, lam[i].imag, w, tie=1e-12)] != 0:
+            if H and kk[dominant_harmonic(e, kk, lam[i].imag, w, tie=1e-12)] != 0:
                 continue                            # a copy of a mode centred elsewhere
             keep.append(i)
             tails.append((e[0] + e[-1]) / max(e.sum(), 1e-300) if H else 0.0)

@@ -19,9 +19,9 @@ import warnings
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spl
 
-from .blade_modes import ConvergenceError, newton
+from ..numerics.newton import ConvergenceError, newton
+from .steady import constant_steady_state, ignorable_columns
 
 
 def fourier_differentiation(M: int, period: float) -> np.ndarray:
@@ -86,7 +86,7 @@ def periodic_steady_state(model, harmonics: int = 8, tol: float = 1e-9, max_iter
         raise ValueError(f"rotor_speed: {model.rotor_speed} is not allowed for a periodic "
                          "steady state; need > 0 [rad/s]")
     try:
-        y = model.steady_state()
+        y = constant_steady_state(model)
         return PeriodicSteadyState(times=np.array([0.0]), states=y[None], period=model.period,
                                    iterations=0, constant=True)
     except (ValueError, ConvergenceError):
@@ -139,7 +139,7 @@ def _continuation(model, harmonics, tol, max_iter, progress, first_error):
     (homotopy_turbine at CONTINUATION_START) to the turbine itself, each solution the next
     one's starting guess; the step (a factor on lam) grows after a success and shrinks after
     a failure.  Raises ConvergenceError saying where the continuation stalled."""
-    from .assembly import TurbineModel
+    from ..assembly import TurbineModel
     T0 = model.turbine
     if not (T0.gravity.enabled or T0.nacelle.yaw_free):
         raise first_error
@@ -197,7 +197,7 @@ def _harmonic_balance(model, harmonics, tol, max_iter, progress, guess) -> Perio
 
     # ignorable coordinates (a free yaw angle) are defined up to a constant: hold them at
     # their value at t = 0 (bordered Newton steps, see blade_modes.newton)
-    ign = model.ignorable_columns(model.jacobians(np.zeros(n), Y[0], times[0])[0])
+    ign = ignorable_columns(model.jacobians(np.zeros(n), Y[0], times[0])[0])
     Yflat, it = newton(residual, jacobian, Y.ravel(), tol=tol, max_iter=max_iter,
                        what=f"periodic steady state (harmonic balance, {harmonics} harmonics)",
                        fixed=ign)

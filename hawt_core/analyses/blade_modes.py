@@ -1,0 +1,91 @@
+"""Modes of one blade clamped to a hub spinning at constant speed (the symmetric modes of the
+paper's Table 2).
+
+The blade root sits at radius ``e`` on a hub spinning about ``b3`` at ``Omega0``: in the root
+frame the root velocity is ``v = e Omega0 b2`` and the angular velocity ``omega = Omega0 b3``
+(plus gravity, if enabled, which then makes the problem periodic: not handled here - the
+blade is analysed in its rotating-frame steady state without gravity).
+Steps: nonlinear steady state (Newton), exact linearization ``E ydot = A y``
+(``E = dR/dydot``, ``A = -dR/dy``), generalized eigen-analysis of the pencil ``(A, E)``,
+selection of the physical (finite, in-band) eigenvalues, classification by strain energy.
+"""
+from __future__ import annotations
+
+from typing import Optional
+
+import numpy as np
+
+from ..assembly import SpinningBlade
+from ..fem.energy import FAMILIES, classify_energy, frequency_bound
+from ..model import Turbine
+from ..numerics.pencil import finite_modes, sparse_modes
+from ..numerics.threads import blas_threads
+from ..results.modes import BladeMode, BladeModesResult, mode_shape
+
+__all__ = ["blade_modes", "SPARSE_THRESHOLD", "DEFAULT_SPARSE_COUNT"]
+
+
+#: Above this many unknowns, ``method="auto"`` uses the sparse shift-invert path.
+SPARSE_THRESHOLD = 600
+
+#: Default number of modes returned by the sparse path.
+DEFAULT_SPARSE_COUNT = 30
+
+
+def blade_modes(turbine: Turbine, elements: Optional[int] = None,
+                rotor_speed: Optional[float] = None, count: Optional[int] = None,
+                method: str = "auto", band_factor: float = 100.0) -> BladeModesResult:
+    """Modes of one blade clamped on the spinning hub, sorted by frequency.
+
+    ``elements`` (default: the turbine's), ``rotor_speed`` [rad/s] (default: the turbine's).
+    ``method``: "dense" (deflation of the infinite eigenvalues + QZ: every finite mode, 3N for
+    a rigid-axial, shear-rigid blade), "sparse" (shift-invert Arnoldi about 0 with a sparse LU:
+    the lowest ``count`` modes), or "auto" (sparse above SPARSE_THRESHOLD unknowns).
+    ``count``: how many of the lowest modes to return (default: all for dense,
+    DEFAULT_SPARSE_COUNT for sparse).  ``band_factor``: modes above this many times the
+    element-level frequency bound (:func:`frequency_bound`) are discarded as numerical.
+    """
+    if method not in ("auto", "dense", "sparse"):
+        raise ValueError(f"method: {method!r} is not allowed; use 'auto', 'dense' or 'sparse'")
+    if count is not None:
+        if isinstance(count, bool) or int(count) != count or count < 1:
+            raise ValueError(f"count: {count!r} is not allowed; need an integer >= 1")
+        count = int(count)
+    with blas_threads():
+        return _blade_modes(turbine, elements, rotor_speed, count, method, band_factor)
+
+
+def _blade_modes(turbine, elements, rotor_speed, count, method, band_factor):
+    model = SpinningBlade(turbine, elements, rotor_speed)
+    y0 = model.steady_state()
+    Jy, Jd = model.jacobians(np.zeros(model.n), y0)
+    om = model.rotor_speed
+    band = band_factor * frequency_bound(model.beam.props)
+    if method == "auto":
+        method = "sparse" if model.n > SPARSE_THRESHOLD else "dense"
+    if method == "sparse":
+        k = DEFAULT_SPARSE_COUNT if count is None else count
+        lam, X = sparse_modes(-Jy, Jd, k, band=band)
+    else:
+        lam, X = finite_modes(-Jy.toarray(), Jd.toarray(), band)
+    order = np.lexsort((lam.real, np.abs(lam.imag)))
+    if count is not None:
+        order = order[:count]
+    modes = []
+    counts = {}
+    for j in order:
+        x = X[:, j]
+        energy = classify_energy(model.beam, x)
+        fam = FAMILIES[int(np.argmax(energy))]
+        counts[fam] = counts.get(fam, 0) + 1
+        w = abs(lam[j])
+        modes.append(BladeMode(family=fam, index=counts[fam],
+                          frequency_per_rev=float(lam[j].imag / om) if om > 0 else float("nan"),
+                          frequency_hz=float(lam[j].imag / (2 * np.pi)),
+                          damping_ratio=float(-lam[j].real / w) if w > 0 else 0.0,
+                          eigenvalue=complex(lam[j]), shape=mode_shape(model.beam, x)))
+    settings = {"turbine": turbine.name, "elements": model.beam.N, "rotor_speed": om,
+                "hub_radius": float(turbine.hub.radius), "method": method,
+                "count": count, "unknowns": model.n}
+    return BladeModesResult(rotor_speed=om, elements=model.beam.N, modes=modes,
+                            root_force=y0[0:3].copy(), settings=settings)

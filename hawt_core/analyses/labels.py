@@ -1,0 +1,336 @@
+"""Automatic labels of Floquet modes: the family (yaw, teeter, tower, or the strain-energy
+dominant flap/lag/torsion/axial/shear), the exponent resolved by the dominant harmonic of
+the motion that names the mode, the blade symmetry (symmetric/antisymmetric, collective,
+cyclic, differential) and, with three or more blades, the fixed-frame frequency and whirl;
+degenerate clusters split along the blade symmetry classes; the index within a group.
+"""
+
+from __future__ import annotations
+
+from typing import Optional
+
+import numpy as np
+import scipy.linalg as sl
+
+from ..assembly import TurbineModel
+from ..fem.energy import FAMILIES, classify_energy
+from ..results.modes import Mode
+from ..solvers.floquet import dominant_harmonic
+from ..solvers.multiblade import fixed_frame_modes
+
+__all__ = ['label_modes', 'separate_degenerate_modes', 'add_fixed_frame', 'family_exponent', 'exponent_fields', 'number_modes', 'FAMILY_ROWS', 'TOWER_DIRECTIONS']
+
+
+#: ``symmetry`` of a tower mode: the dominant tower-top motion
+TOWER_DIRECTIONS = ("axial", "side-side", "fore-aft", "torsion")
+
+
+def _tower_motion(model: TurbineModel, x):
+    """Elastic tower motion of eigenvector x as metres: (largest, direction).
+
+    Largest nodal displacement components (t1 axial, t2 side-side, t3 fore-aft) [m] and the
+    largest torsion (rotation about t1) times the rotor radius (the rotor-tip metres it
+    causes); bending rotations are counted through the displacements they come with."""
+    tl = model.layout.tower()
+    R = model.turbine.hub.radius + model.turbine.blade.length
+    u = np.abs(x[tl.u[1:]]).max(axis=0)
+    parts = np.array([u[0], u[1], u[2], R * np.abs(x[tl.theta[1:, 0]]).max()])
+    j = int(np.argmax(parts))
+    return float(parts[j]), TOWER_DIRECTIONS[j]
+
+
+def label_modes(model: TurbineModel, fl, columns) -> list:
+    """Modes (unsorted indices) labelled from their Floquet eigenvectors x(0)."""
+    lay = model.layout
+    R = model.turbine.hub.radius + model.turbine.blade.length
+    sec = model.turbine.blade.sections
+    r_g = float(np.sqrt(np.mean(sec.i1) / np.mean(sec.mass)))  # torsion radius of gyration
+    nb = model.n_blades
+    pos = {int(r): j for j, r in enumerate(fl.sample_rows)}
+    modes = []
+    for i in columns:
+        x = fl.eigenvectors[:, i]
+        # rigid rotations: RMS over the revolution of the periodic eigenvector (a teeter
+        # oscillating at 1/rev may pass through zero at t = 0), as blade-tip metres
+        rigid = {nm: R * float(np.sqrt(np.mean(np.abs(fl.periodic_sample(i)[:, pos[lay[nm]]]) ** 2)))
+                 if lay[nm] in pos else R * abs(x[lay[nm]])
+                 for nm in ("yaw", "teeter") if nm in lay}
+        elastic = 0.0
+        energy = np.zeros(6)
+        for k in range(nb):
+            b = lay.blade(k)
+            u = x[b.u[1:]]
+            th = x[b.theta[1:]]
+            elastic = max(elastic, np.abs(u).max(), r_g * np.abs(th[:, 0]).max())
+            off = lay.blade_offset(k)
+            energy += classify_energy(model.beam, x[off:off + model.beam.n])
+        tower, tower_dir = _tower_motion(model, x) if lay.has_tower else (0.0, None)
+        rig_name = None
+        if tower > 0 and tower >= max([elastic] + [0.25 * r for r in rigid.values()]):
+            # the tower's elastic motion dominates: a tower mode (symmetry = direction). A
+            # tower torsion under a free yaw bearing turns the yaw angle (relative to the
+            # tower top) as much as the tower twists, and tower bending swings a free yaw and
+            # the teeter (gyroscopic coupling), all counted in blade-tip metres: hence the
+            # factor 0.25 on the rigid rotations (a heuristic, like the 3.0 below)
+            rig_name = "tower"
+        elif rigid and max(rigid.values()) >= 3.0 * elastic:
+            # the free yaw angle alone is the rigid-body yaw mode; any rigid mode in which the
+            # hub teeters appreciably is a teeter mode (the paper's labels)
+            rig_name = "teeter" if rigid.get("teeter", 0.0) >= 0.25 * rigid.get("yaw", 0.0) \
+                else "yaw"
+        if rig_name == "tower":
+            family, symmetry, phase = "tower", tower_dir, None
+        elif rig_name is not None:
+            family, symmetry, phase = rig_name, None, None
+        else:
+            family = FAMILIES[int(np.argmax(energy))]
+        eta = family_exponent(model, fl, i, family)
+        if rig_name is None:
+            symmetry, phase = _blade_symmetry(model, fl, i, eta)
+        modes.append(Mode(family=family, symmetry=symmetry, index=0,
+                          **exponent_fields(eta, fl.omega),
+                          blade_phase_deg=phase,
+                          participation={**{k: float(v) for k, v in rigid.items()},
+                                         **({"tower": tower} if lay.has_tower else {}),
+                                         "elastic": float(elastic),
+                                         **{f: float(e) for f, e in zip(
+                                             ("axial", "shear2", "shear3", "torsion", "flap", "lag"),
+                                             energy)}},
+                          column=int(i)))
+    return modes
+
+
+#: Exponents within this (relative) of each other form a degenerate cluster whose basis
+#: is re-chosen along the blade symmetry classes.
+CLUSTER_TOL = 1e-7
+
+
+def _blade_vectors(model: TurbineModel):
+    """Per blade, the rows of its nodal u and theta (same local order for every blade), and
+    their weights (theta times the blade length: tip metres)."""
+    lay = model.layout
+    rows = [np.concatenate([lay.blade(k).u[1:].ravel(), lay.blade(k).theta[1:].ravel()])
+            for k in range(model.n_blades)]
+    b0 = lay.blade(0)
+    w = np.concatenate([np.ones(b0.u[1:].size),
+                        np.full(b0.theta[1:].size, model.turbine.blade.length)])
+    return rows, w
+
+
+def separate_degenerate_modes(model: TurbineModel, fl, columns) -> int:
+    """Re-choose the basis of every cluster of equal exponents among ``columns`` so that each
+    vector belongs to one blade symmetry class (returns how many clusters were changed).
+
+    Equal exponents have an arbitrary basis: with four blades the collective and
+    differential torsion of a blade-local mode are exactly degenerate, and an eigen-solver
+    returns any mix of them, which the labels then misread (two "collective torsion" at one
+    frequency, none at the other).  The classes are the discrete Fourier components over
+    the blades (m = 0 collective, Nb/2 differential, the others cyclic): with the blade
+    vectors' components F_m (display rows, x(0)), the pure combinations c solve
+    ``W_m c = G c`` with eigenvalue 1 (``W_m = F_m^H F_m``, ``G = sum_m W_m``).  A cluster
+    is changed only if it splits completely into pure vectors (eigenvalue > 0.999)."""
+    nb = model.n_blades
+    if nb < 2 or len(columns) < 2:
+        return 0
+    blade_rows, w = _blade_vectors(model)
+    cols = sorted((int(c) for c in columns), key=lambda c: (fl.exponents[c].imag,
+                                                              fl.exponents[c].real))
+    omega = fl.omega
+    clusters, cur = [], [cols[0]]
+    for c in cols[1:]:
+        a, b = fl.exponents[cur[-1]], fl.exponents[c]
+        if abs(a - b) <= CLUSTER_TOL * max(abs(a), omega):
+            cur.append(c)
+        else:
+            clusters.append(cur)
+            cur = [c]
+    clusters.append(cur)
+    nu = fl._n_upper
+    changed = 0
+    phase = np.exp(-2j * np.pi * np.outer(np.arange(nb), np.arange(nb)) / nb)   # (m, b)
+    for cl in clusters:
+        if len(cl) < 2:
+            continue
+        kinds = {0 if c < nu else 1 if c < 2 * nu else 2 for c in cl}
+        if len(kinds) != 1 or 2 in kinds:
+            continue                                # real exponents: leave them
+        X = fl.eigenvectors
+        B = np.array([X[br][:, cl] * w[:, None] for br in blade_rows])     # (Nb, rows, c)
+        F = np.einsum("mb,brc->mrc", phase, B) / nb                          # (m, rows, c)
+        Wm = np.einsum("mrc,mrd->mcd", np.conj(F), F)
+        G = Wm.sum(0)
+        if np.linalg.cond(G) > 1e12:
+            continue
+        Q, found = [], 0
+        for m in range(nb):
+            ev, vec = sl.eigh(Wm[m], G)
+            sel = ev > 0.999
+            Q.append(vec[:, sel])
+            found += int(sel.sum())
+        if found != len(cl):
+            continue
+        Q = np.concatenate(Q, axis=1)
+        fl.recombine(cl, Q)
+        changed += 1
+    return changed
+
+
+def exponent_fields(eta: complex, w0: float) -> dict:
+    """Mode fields frequency_per_rev, real_per_rev, frequency_hz and damping_ratio of the
+    characteristic exponent ``eta`` [rad/s] at the rotor speed ``w0``."""
+    return {"frequency_per_rev": float(eta.imag / w0), "real_per_rev": float(eta.real / w0),
+            "frequency_hz": float(eta.imag / (2 * np.pi)),
+            # a zero exponent (free yaw angle) has no damping ratio: report 0
+            "damping_ratio": float(-eta.real / abs(eta)) if abs(eta) > 1e-6 * w0 else 0.0}
+
+
+#: Blade unknowns whose motion names an elastic family: (field, component, weight), the
+#: weight "L" standing for the blade length (a slope's tip metres), "r_g" for the sections'
+#: torsional radius of gyration (a twist's metres of mass motion).
+FAMILY_ROWS = {"flap": (("u", 2, 1.0), ("theta", 1, "L")),
+               "lag": (("u", 1, 1.0), ("theta", 2, "L")),
+               "torsion": (("theta", 0, "r_g"),),
+               "axial": (("u", 0, 1.0),),
+               "shear": (("u", 1, 1.0), ("u", 2, 1.0))}
+
+
+def _family_rows(model: TurbineModel, family: str, blade: Optional[int] = None):
+    """(rows, weights) of the motion that names ``family``: the yaw or teeter angle, the
+    tower top (displacements, rotations times the rotor radius), or the blades' FAMILY_ROWS
+    (all blades, or one)."""
+    lay = model.layout
+    R = model.turbine.hub.radius + model.turbine.blade.length
+    if family in ("yaw", "teeter"):
+        return ([lay[family]], [1.0]) if family in lay else ([], [])
+    if family == "tower":
+        tl = lay.tower()
+        return (list(tl.u[-1]) + list(tl.theta[-1]), [1.0] * 3 + [R] * 3)
+    sec = model.turbine.blade.sections
+    scale = {"L": model.turbine.blade.length,
+             "r_g": float(np.sqrt(np.mean(sec.i1) / np.mean(sec.mass)))}
+    rows, wts = [], []
+    for k in (range(model.n_blades) if blade is None else [blade]):
+        b = lay.blade(k)
+        for field_name, comp, w in FAMILY_ROWS[family]:
+            r = getattr(b, field_name)[1:, comp]
+            rows += r.tolist()
+            wts += [scale.get(w, w)] * len(r)
+    return rows, wts
+
+
+def family_exponent(model: TurbineModel, fl, i: int, family: str) -> complex:
+    """Characteristic exponent of mode ``i`` with the integer-per-rev ambiguity resolved by the
+    dominant harmonic of the motion that names the mode (the paper's convention): the teeter
+    angle for teeter modes, the yaw angle for yaw modes, the tower top for tower modes, the
+    blades' flap (u3 and the slope theta2), lag (u2, theta3), twist (theta1), ... motion for
+    blade modes (ties: the non-negative frequency closest to zero).  With periodic
+    coefficients a mode's vector has several harmonics, and a sideband of another family's
+    motion (a torsion sideband of a flap mode) must not name its frequency."""
+    pos = {int(r): j for j, r in enumerate(fl.sample_rows)}
+    rows, wts = _family_rows(model, family)
+    sel = [(pos[int(r)], w) for r, w in zip(rows, wts) if int(r) in pos]
+    if not sel:
+        return _nonnegative(complex(fl.exponents[i]))
+    P = fl.periodic_sample(i)[:, [j for j, _ in sel]] * np.array([w for _, w in sel])[None, :]
+    M = P.shape[0]
+    energy = (np.abs(np.fft.fft(P, axis=0) / M) ** 2).sum(1)
+    k = np.fft.fftfreq(M, 1.0 / M).astype(int)
+    eta = complex(fl.exponents[i])
+    best = dominant_harmonic(energy, k, eta.imag, fl.omega, tie=1e-9)
+    return _nonnegative(eta + 1j * k[best] * fl.omega)
+
+
+def _nonnegative(eta: complex) -> complex:
+    """The member of a conjugate pair with a non-negative frequency (the system is real: the
+    conjugate mode has the conjugate exponent and the opposite dominant harmonic)."""
+    return eta.conjugate() if eta.imag < 0 else eta
+
+
+def _blade_symmetry(model: TurbineModel, fl, i: int, eta: complex):
+    """Symmetry of the blade motions of mode ``i`` reported with the exponent ``eta``;
+    (label, blade-to-blade phase [deg]).
+
+    Blade k reaches at t + T/Nb the azimuth where blade k+1 was at t; with the periodic part
+    p of the reported exponent the blades relate by ``p_k(t + T/Nb) = e^{i phase}
+    p_{k+1}(t)`` (exactly for a rotor with the relabelling symmetry, in the least-squares
+    sense otherwise; shifts of p by Fourier interpolation).  Phase 0: symmetric (two blades)
+    or collective; 180 deg: antisymmetric or differential; other multiples of 360/Nb:
+    cyclic.  Reporting a frequency one whole per-rev off turns the phase by 360/Nb, which is
+    why the symmetry follows the reported exponent (with periodic coefficients the dominant
+    harmonic can differ from the marching's principal one)."""
+    nb = model.n_blades
+    if nb < 2:
+        return None, None
+    pos = {int(r): j for j, r in enumerate(fl.sample_rows)}
+    rows, w = _blade_vectors(model)
+    if any(int(x) not in pos for r in rows for x in r):
+        return None, None
+    blades = [[pos[int(x)] for x in r] for r in rows]
+    P = fl.periodic_sample(i)
+    eta0 = complex(fl.exponents[i])
+    flip = eta.imag * eta0.imag < 0 or (eta.imag == 0 and eta0.imag != 0 and
+                                       abs(eta - eta0.conjugate()) < abs(eta - eta0))
+    if flip:                        # eta is the conjugate member's exponent
+        P, eta0 = np.conj(P), eta0.conjugate()
+    M = P.shape[0]
+    t = fl.sample_times
+    dk = int(round((eta.imag - eta0.imag) / fl.omega))
+    C = np.fft.fft(P * np.exp(-1j * dk * fl.omega * t)[:, None], axis=0) / M   # harmonics of p
+    kk = np.fft.fftfreq(M, 1.0 / M)
+    shift = np.exp(1j * kk * 2 * np.pi / nb)[:, None]                       # t -> t + T/Nb
+    z = 0j
+    for k in range(nb):
+        a = C[:, blades[k]] * w[None, :] * shift
+        b_ = C[:, blades[(k + 1) % nb]] * w[None, :]
+        z += np.vdot(b_, a)
+    phase = float(np.degrees(np.angle(z))) if abs(z) > 0 else 0.0
+    step = round(phase / (360.0 / nb)) % nb
+    if nb == 2:
+        return ("symmetric" if step == 0 else "antisymmetric"), phase
+    if step == 0:
+        return "collective", phase
+    if nb % 2 == 0 and step == nb // 2:
+        return "differential", phase
+    return "cyclic", phase
+
+
+def number_modes(modes):
+    counts = {}
+    for m in modes:
+        key = (m.family, m.symmetry)
+        counts[key] = counts.get(key, 0) + 1
+        m.index = counts[key]
+    return modes
+
+
+_WHIRL_SYMMETRY = {"collective": "collective", "forward": "forward-whirl",
+                   "backward": "backward-whirl", "differential": "differential"}
+
+
+def add_fixed_frame(model, transform, fl, modes, rows, wts):
+    """Fixed-frame fields of every mode (three or more blades); the blade modes' symmetry
+    becomes their whirl: collective, backward-whirl, forward-whirl (-k for the k-th cyclic
+    pair, k >= 2), differential.  The frequency and the whirl of a blade mode come from the
+    motion that names it (as its rotating-frame frequency does: hawt_core.modal
+    FAMILY_ROWS), the whirl of a yaw, teeter or tower mode from all blade motion."""
+    blade_rows = [(r, w) for r, w in zip(rows, wts) if r >= model.layout.blade_offset(0)
+                  and r < model.layout.blade_offset(0) + model.n_blades * model.beam.n]
+    br, bw = [r for r, _ in blade_rows], [w for _, w in blade_rows]
+    specs = {}
+    for m in modes:
+        fr, fw = _family_rows(model, m.family)
+        specs[m.column] = (fr, fw, fr, fw) if m.family in FAMILY_ROWS else (fr, fw, br, bw)
+    ff = fixed_frame_modes(transform, fl, specs)
+    for m in modes:
+        f = ff[m.column]
+        x = exponent_fields(f.exponent, fl.omega)
+        m.fixed_frame_per_rev = x["frequency_per_rev"]
+        m.fixed_frame_hz = x["frequency_hz"]
+        m.fixed_frame_damping_ratio = x["damping_ratio"]
+        m.whirl = f.whirl
+        m.cyclic_order = f.order
+        if m.family not in ("yaw", "teeter", "tower"):
+            sym = _WHIRL_SYMMETRY[f.whirl]
+            if f.whirl in ("forward", "backward") and f.order > 1:
+                sym = f"{sym}-{f.order}"
+            m.symmetry = sym

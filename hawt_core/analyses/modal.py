@@ -1,0 +1,377 @@
+"""Floquet modal analysis of the coupled turbine (the paper's Table 2), with automatic labels.
+
+Pipeline: steady state (constant, or periodic by harmonic balance) -> exact periodic
+linearization ``E(t) x' = A(t) x`` -> monodromy by time marching (hawt_core.floquet: Radau IIA
+by default, the paper's central differencing with ``method="paper"``), Peters' Fast Floquet
+over ``T/Nb`` when the blades are identical and equally spaced -> characteristic exponents with
+the integer-per-rev ambiguity resolved by the dominant harmonic of the periodic eigenvector ->
+labels.
+
+Which multipliers are reported: the descriptor system has one multiplier per dynamic state
+(12N + 4 for the paper's rotor), but a marching scheme resolves only the modes whose frequency
+is well below its step rate; the highest mesh modes (hundreds per-rev) come back damped out
+(Radau) or aliased (central differencing). Each Floquet mode is matched (by the modal assurance
+criterion of its eigenvector at t = 0) to a mode of the time-averaged pencil; modes matched to an
+averaged mode above the method's resolution limit (``steps / 8`` per-rev for Radau IIA,
+``steps / 12`` for central differencing) are left out and counted in ``unresolved``.
+
+Labels: ``family`` is yaw or teeter when the rigid-body rotation moves the blade tips more
+than the elastic deflection does, otherwise the strain-energy-dominant direction (flap, lag,
+torsion, axial, shear); ``symmetry`` compares the blades in their own frames (symmetric /
+antisymmetric for two blades; collective / cyclic / differential for more); ``index``
+counts within (family, symmetry) by frequency.  With a flexible tower, ``family`` is tower
+when the tower's elastic motion dominates, and ``symmetry`` is then its direction
+(fore-aft, side-side, torsion, axial).
+"""
+from __future__ import annotations
+
+import time
+import warnings
+from typing import Callable, Optional
+
+import numpy as np
+import scipy.linalg as sl
+from scipy.optimize import linear_sum_assignment
+
+from ..assembly import TurbineModel
+from ..model import Turbine
+from ..numerics.checks import check_elements
+from ..numerics.mac import mac_matrix
+from ..numerics.pencil import deflate_infinite, equilibrate
+from ..numerics.threads import blas_threads
+from ..results.modes import ModalResult
+from ..solvers.floquet import LinearPeriodicDAE, floquet_analysis, periodic_modes
+from ..solvers.hill import hill_modes
+from ..solvers.multiblade import MultiBladeTransform
+from ..solvers.periodic import periodic_steady_state
+from .labels import (add_fixed_frame, exponent_fields, family_exponent, label_modes,
+                     number_modes, separate_degenerate_modes)
+
+__all__ = ["modal_analysis", "periodic_dae", "validate_request", "Cancelled", "METHODS",
+           "DEFAULT_STEPS", "DEFAULT_MAX_PER_REV", "STEPS_PER_CYCLE", "MIN_STEPS", "MAX_STEPS",
+           "MAX_ELEMENTS", "MAX_PER_REV"]
+
+
+#: "auto": multi-blade coordinates (Hill's method with constant coefficients, one
+#: eigenproblem) where they make the system time-invariant (3+ identical blades on a rigid
+#: hub, constant steady state), otherwise Radau IIA monodromy; "radau", "paper": monodromy
+#: by time marching; "hill": Hill's method (in multi-blade coordinates where the rotor's
+#: symmetry allows it, in the rotating frame otherwise)
+METHODS = ("auto", "radau", "paper", "hill")
+
+DEFAULT_STEPS = {"radau": 400, "paper": 1000}
+
+#: Largest frequency [per-rev] reported by Hill's method and multi-blade coordinates (the
+#: resolution of the default 400 Radau IIA steps, steps / 8).
+DEFAULT_MAX_PER_REV = 50.0
+
+#: Relative residual above which the blade-relabelling symmetry is taken not to hold.
+SYMMETRY_TOL = 1e-8
+
+#: Resolution limit: reported frequencies below steps / this (per-rev over a full period).
+STEPS_PER_CYCLE = {"radau": 8.0, "paper": 12.0}
+
+#: Fewest and most marching steps per period accepted by :func:`validate_request`.
+MIN_STEPS = 8
+MAX_STEPS = 1_000_000
+
+#: Most samples of the periodic eigenvectors per period (memory: samples x rows x modes).
+MAX_SAMPLES = 512
+
+#: Most finite elements per blade accepted by :func:`validate_request`.
+MAX_ELEMENTS = 512
+
+
+class Cancelled(RuntimeError):
+    """The analysis was cancelled through the ``cancel`` callback."""
+
+
+# ---------------------------------------------------------------------------- validation
+#: Largest accepted max_per_rev (Hill's method and multi-blade coordinates).
+MAX_PER_REV = 1000.0
+
+
+def validate_request(elements=None, rotor_speed=None, steps=None, method=None,
+                     max_per_rev=None):
+    """Check analysis overrides; raises ValueError naming the field, value and what's allowed."""
+    if elements is not None:
+        if isinstance(elements, bool):      # check_elements would take True for 1
+            raise ValueError(f"elements: {elements!r} is not allowed; need an integer >= 1")
+        if check_elements(elements) > MAX_ELEMENTS:
+            raise ValueError(f"elements: {elements!r} is not allowed; need at most "
+                             f"{MAX_ELEMENTS} per blade")
+    if rotor_speed is not None:
+        r = float(rotor_speed)
+        if not np.isfinite(r) or r <= 0:
+            raise ValueError(f"rotor_speed: {rotor_speed!r} is not allowed; need a finite "
+                             "number > 0 [rad/s]")
+    if steps is not None:
+        if isinstance(steps, bool) or not float(steps).is_integer() or not MIN_STEPS <= int(steps) <= MAX_STEPS:
+            raise ValueError(f"steps: {steps!r} is not allowed; need an integer from {MIN_STEPS} "
+                             f"to {MAX_STEPS}")
+    if method is not None and method not in METHODS:
+        raise ValueError(f"method: {method!r} is not allowed; choose one of {', '.join(METHODS)}")
+    if max_per_rev is not None:
+        try:
+            f = float(max_per_rev)
+        except (TypeError, ValueError):
+            f = float("nan")
+        if isinstance(max_per_rev, bool) or not (0 < f <= MAX_PER_REV):
+            raise ValueError(f"max_per_rev: {max_per_rev!r} is not allowed; need a number "
+                             f"> 0 and <= {MAX_PER_REV:g} [per-rev]")
+
+
+# ---------------------------------------------------------------------------- analysis
+def periodic_dae(model: TurbineModel, steady, check_symmetry: bool = True) -> LinearPeriodicDAE:
+    """The exact periodic linearization about ``steady`` as a LinearPeriodicDAE, with the
+    blade relabelling S for Fast Floquet and multi-blade coordinates when the rotor has the
+    symmetry (identical, equally spaced blades; a rigid hub or two blades on a teeter hinge).
+    With ``check_symmetry`` the identity ``E(t + T/Nb) = S E(t) S^T`` (and A) is verified at
+    two times; if it does not hold to SYMMETRY_TOL, S is dropped with a RuntimeWarning and
+    the full period is used (a wrong symmetry would give wrong exponents)."""
+    cache = {}
+
+    def jac(t):
+        t = float(t)
+        if t not in cache:
+            if len(cache) > 64:
+                cache.clear()
+            Jy, Jd = model.jacobians(steady.rate_at(t), steady.at(t), t)
+            cache[t] = (Jd, -Jy)
+        return cache[t]
+
+    S, nb = None, None
+    if model.n_blades >= 2:
+        try:
+            S, nb = model.blade_relabelling(), model.n_blades
+        except ValueError:
+            S, nb = None, None
+    dae = LinearPeriodicDAE(lambda t: jac(t)[0], lambda t: jac(t)[1], model.period,
+                            model.differential, S=S, blades=nb)
+    if S is not None and check_symmetry:
+        # times on the Fourier sampler's first grid (their linearizations are reused)
+        err = dae.check_symmetry(model.period * np.array([0.0, 0.2]))
+        dae.symmetry_error = err
+        if not err <= SYMMETRY_TOL:
+            warnings.warn(f"blade-relabelling symmetry: residual {err:.1e} > {SYMMETRY_TOL:.0e}"
+                          "; using the full period (no Fast Floquet, no multi-blade "
+                          "coordinates)", RuntimeWarning, stacklevel=2)
+            dae = LinearPeriodicDAE(dae.E, dae.A, model.period, model.differential)
+            dae.symmetry_error = err
+    return dae
+
+
+def dynamic_dimension(dae: LinearPeriodicDAE) -> int:
+    """Number of dynamic states (finite eigenvalues of the pencil at t = 0), found by exact
+    deflation of the infinite eigenvalues (blade_modes.deflate_infinite): the dimension of the
+    consistent subspace.  O(n^3): the analyses use TurbineModel.dynamic_dimension (a count)
+    instead, which tests/test_assembly.py checks against this."""
+    Ar, _, _ = deflate_infinite(dae.A(0.0).toarray(), dae.E(0.0).toarray())
+    return int(Ar.shape[0])
+
+
+def _averaged_modes(dae: LinearPeriodicDAE, rows, weights):
+    """Finite eigenpairs of the time-averaged pencil (exact for harmonics up to 4; the
+    5-point grid is the Fourier sampler's first grid, so these linearizations may still be in
+    periodic_dae's cache of recent ones, which is cleared when it exceeds 64 entries)."""
+    ts = dae.period * np.arange(5) / 5
+    E0 = sum(dae.E(t).toarray() for t in ts) / len(ts)
+    A0 = sum(dae.A(t).toarray() for t in ts) / len(ts)
+    As, Es, c = equilibrate(A0, E0)
+    (al, be), X = sl.eig(As, Es, homogeneous_eigvals=True)
+    ok = np.abs(be) > 1e-8 * np.abs(al)
+    lam = al[ok] / be[ok]
+    X = X[:, ok] / c[:, None]
+    return lam, X[rows] * weights[:, None]
+
+
+def _monodromy_modes(model: TurbineModel, dae: LinearPeriodicDAE, method: str, steps: int,
+                     use_fast: bool, rows, wts, d: int):
+    """Floquet by time marching (Radau IIA or the paper's central differencing): the
+    FloquetResult, the labelled resolved modes, the count of unresolved ones and the
+    resolution limit [per-rev]."""
+    # samples of the periodic eigenvectors per period: the dominant harmonic is resolved up
+    # to samples / 2 per-rev, so the reported band is also capped at samples / 2.5
+    samples = int(min(MAX_SAMPLES, max(128, 2 ** np.ceil(np.log2(2.5 * steps / STEPS_PER_CYCLE[method])))))
+    fl = floquet_analysis(dae, method=method, steps=steps, fast=use_fast, samples=samples,
+                          observed=rows, weights=wts ** 2, dynamic_dim=d)
+    omega = model.rotor_speed
+    limit = min(steps / STEPS_PER_CYCLE[method], samples / 2.5)
+    lam0, X0 = _averaged_modes(dae, rows, wts)
+    resolved = []
+    unresolved = 0
+    for i in fl.modes():
+        # annihilated by the marching (|multiplier| < 1e-8: it would decay by e^-18 within a
+        # revolution) or without a dominant harmonic: an unresolved mesh mode, not a result
+        if abs(fl.multipliers[i]) < 1e-8 or fl.harmonic_share[i] < 0.05:
+            unresolved += 1
+            continue
+        v = fl.eigenvectors[rows, i] * wts
+        mac = mac_matrix(v[:, None], X0)[0]
+        j = int(np.argmax(mac)) if len(mac) else -1
+        f_avg = abs(lam0[j].imag) / omega if j >= 0 else 0.0
+        if f_avg > limit:
+            unresolved += 1
+        else:
+            resolved.append(i)
+    resolved = np.array(resolved, int)
+    if method == "paper":
+        # Central differencing keeps |multiplier| = 1 for the unresolved mesh modes and aliases
+        # them onto low frequencies, where they also mix with the free-yaw double multiplier
+        # at 1: keep only the modes that an L-stable Radau IIA march (which annihilates
+        # unresolved modes) confirms, within 1 % in frequency and 0.01 per-rev in real part.
+        ref = floquet_analysis(dae, method="radau", steps=max(128, steps // 4), fast=use_fast,
+                               observed=rows, weights=wts ** 2, dynamic_dim=d)
+        keep = [j for j in ref.modes() if abs(ref.multipliers[j]) > 1e-12]
+        fr, rr = ref.frequency_per_rev[keep], ref.real_per_rev[keep]
+        fi = fl.frequency_per_rev[resolved][:, None]
+        ri = fl.real_per_rev[resolved][:, None]
+        ok = (np.abs(fi - fr[None]) <= 1e-2 * np.maximum(1, fr[None])) & (np.abs(ri - rr[None]) <= 1e-2)
+        cost = np.where(ok, np.abs(fi - fr[None]) + np.abs(ri - rr[None]), 1e6)
+        pi, pj = linear_sum_assignment(cost)  # one paper mode per confirming Radau mode
+        pairs = [(resolved[a], keep[b]) for a, b in zip(pi, pj) if ok[a, b]]
+        unresolved += len(resolved) - len(pairs)
+        # labels from the Radau eigenvectors: with central differencing the unresolved mesh
+        # modes alias onto the unit circle and mix into nearly equal multipliers' eigenvectors
+        modes = label_modes(model, ref, [b for _, b in pairs])
+        for m, (a, _) in zip(modes, pairs):
+            for name, value in exponent_fields(family_exponent(model, fl, a, m.family),
+                                                fl.omega).items():
+                setattr(m, name, value)
+            m.column = int(a)
+    else:
+        separate_degenerate_modes(model, fl, resolved)
+        modes = label_modes(model, fl, resolved)
+    return fl, modes, unresolved, limit
+
+
+def _hill_floquet(model: TurbineModel, dae: LinearPeriodicDAE, transform, max_per_rev: float,
+                  rows, wts, d: int):
+    """Floquet modes by Hill's method (hawt_core.hill) on ``dae``: the rotating-frame system,
+    or with ``transform`` (a MultiBladeTransform) the system in multi-blade coordinates
+    (constant for an isotropic rotor without gravity: one eigenproblem).  Returns the
+    rotating-frame FloquetResult (samples x(t) = T(t) q(t) e^{eta t} over a revolution, so that
+    labels, shapes and Campbell tracking work as for the marching) and the HillModes."""
+    omega = model.rotor_speed
+    srows = np.unique(rows)
+    pos = {int(r): i for i, r in enumerate(srows)}
+    obs = np.array([pos[int(r)] for r in rows])
+    frame_rows = rows
+    hm = hill_modes(dae, max_per_rev * omega, observed=frame_rows, weights=wts ** 2)
+    T = model.period
+    M = int(min(MAX_SAMPLES, max(128, 2 ** np.ceil(np.log2(2.5 * max_per_rev)))))
+    tm = np.arange(M) * T / M
+    lam = hm.exponents
+    tol = 1e-7 * omega
+    upper = [i for i in range(lam.size) if lam[i].imag > tol]
+    real = [i for i in range(lam.size) if abs(lam[i].imag) <= tol]
+    order = upper + real
+    groups = transform.blade_groups(srows) if transform is not None else None
+    X = np.empty((M, srows.size, len(order)), complex)
+    x0 = np.empty((model.n, len(order)), complex)
+    eta0 = np.empty(len(order), complex)
+    T0 = transform.matrix(0.0) if transform is not None else None
+    for j, i in enumerate(order):
+        q = hm.periodic(i, tm, srows)                              # (M, rows), dae frame
+        q0 = hm.vectors[:, :, i].sum(axis=0)                       # (n,) at t = 0
+        x = transform.to_rotating(q, tm, groups) if transform is not None else q
+        xf = T0 @ q0 if transform is not None else q0
+        eta = lam[i]
+        if j >= len(upper):            # real exponent: a real solution (fix the phase)
+            eta = complex(eta.real, 0.0)
+            k = int(np.argmax(np.abs(xf)))
+            ph = np.conj(xf[k]) / abs(xf[k]) if abs(xf[k]) > 0 else 1.0
+            x, xf = np.real(x * ph), np.real(xf * ph)
+        X[:, :, j] = x * np.exp(eta * tm)[:, None]
+        x0[:, j] = xf
+        eta0[j] = eta
+    fl = periodic_modes(eta0, X, x0, len(upper), period=T, sample_rows=srows, observed=obs,
+                        weights=wts ** 2, method="hill", steps=0, fast=False, blades=1,
+                        n_dynamic=d, timings=dict(hm.timings))
+    return fl, hm
+
+
+def modal_analysis(turbine: Turbine, elements: Optional[int] = None,
+                   rotor_speed: Optional[float] = None, steps: Optional[int] = None,
+                   method: Optional[str] = None, fast: Optional[bool] = None,
+                   harmonics: int = 8, max_per_rev: Optional[float] = None,
+                   progress: Optional[Callable[[float, str], None]] = None,
+                   cancel: Optional[Callable[[], bool]] = None) -> ModalResult:
+    """Floquet modal analysis of ``turbine``; overrides for elements, rotor speed [rad/s],
+    marching steps per period, method (METHODS; default "auto": multi-blade coordinates where
+    they make the system time-invariant, otherwise Radau IIA) and ``max_per_rev`` (the band
+    of Hill's method / multi-blade coordinates, default DEFAULT_MAX_PER_REV).  ``harmonics``:
+    of the periodic steady state.  Three or more blades: every mode also carries its
+    fixed-frame frequency and whirl.  ``progress(fraction, message)`` is called between
+    stages; ``cancel()`` returning True raises Cancelled."""
+    method = method or "auto"
+    validate_request(elements, rotor_speed, steps, method, max_per_rev)
+    with blas_threads():
+        return _modal_analysis(turbine, elements, rotor_speed, steps, method, fast, harmonics,
+                               max_per_rev, progress, cancel)
+
+
+def _modal_analysis(turbine, elements, rotor_speed, steps, method, fast, harmonics,
+                    max_per_rev, progress, cancel) -> ModalResult:
+    t0 = time.perf_counter()
+    timings = {}
+
+    def stage(frac, msg):
+        if cancel is not None and cancel():
+            raise Cancelled(f"modal analysis cancelled during: {msg}")
+        if progress is not None:
+            progress(frac, msg)
+
+    stage(0.0, "building the model")
+    model = TurbineModel(turbine, elements=elements, rotor_speed=rotor_speed)
+    stage(0.05, "steady state")
+    steady = periodic_steady_state(model, harmonics=harmonics)
+    timings["steady_state"] = time.perf_counter() - t0
+    stage(0.2, "linearization")
+    dae = periodic_dae(model, steady)
+    transform = MultiBladeTransform(model) if model.n_blades >= 3 else None
+    mbc = transform.dae(dae) if transform is not None and dae.S is not None else None
+    if method == "auto":
+        method = "hill" if mbc is not None and steady.constant else "radau"
+    use_fast = dae.S is not None if fast is None else (bool(fast) and dae.S is not None)
+    rows, wts = model.display_rows()
+    # the dominant harmonic is judged on displacement-like rows weighted to tip metres
+    d = model.dynamic_dimension()
+    t1 = time.perf_counter()
+    omega = model.rotor_speed
+    extra = {}
+    if method in ("radau", "paper"):
+        steps = int(steps) if steps is not None else DEFAULT_STEPS[method]
+        stage(0.3, f"monodromy ({method}, {steps} steps)")
+        fl, modes, unresolved, limit = _monodromy_modes(model, dae, method, steps, use_fast,
+                                                        rows, wts, d)
+    else:
+        limit = float(max_per_rev) if max_per_rev is not None else DEFAULT_MAX_PER_REV
+        frame = "multi-blade" if mbc is not None else "rotating"
+        stage(0.3, f"Hill's method ({frame} frame, modes below {limit:g} per-rev)")
+        fl, hm = _hill_floquet(model, mbc if mbc is not None else dae,
+                               transform if mbc is not None else None, limit, rows, wts, d)
+        use_fast, steps = False, None
+        separate_degenerate_modes(model, fl, fl.modes())
+        modes = label_modes(model, fl, fl.modes())
+        unresolved = max(0, d - int(fl.exponents.size))     # above the band
+        extra = {"frame": frame, "hill_harmonics": hm.harmonics,
+                 "hill_size": hm.size, "coefficient_harmonics": hm.coefficient_harmonics}
+    timings["floquet"] = time.perf_counter() - t1
+    stage(0.85, "labelling modes")
+    if transform is not None:
+        add_fixed_frame(model, transform, fl, modes, rows, wts)
+        modes.sort(key=lambda m: (m.fixed_frame_per_rev, m.real_per_rev))
+    else:
+        modes.sort(key=lambda m: (m.frequency_per_rev, m.real_per_rev))
+    number_modes(modes)
+    settings = {"turbine": turbine.name, "elements": model.beam.N, "rotor_speed": omega,
+                "method": method, "steps": steps, "fast": bool(use_fast),
+                "blades": model.n_blades, "resolution_per_rev": limit,
+                "steady_state": "constant" if steady.constant
+                else f"periodic ({harmonics} harmonics)", **extra}
+    total = time.perf_counter() - t0
+    timings["total"] = total
+    stage(1.0, "done")
+    return ModalResult(modes=modes, settings=settings, floquet=fl, model=model, steady=steady,
+                       unresolved=unresolved, compute_time=total, timings=timings)

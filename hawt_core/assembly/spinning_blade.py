@@ -1,0 +1,65 @@
+"""One blade clamped to a hub spinning at constant speed: the model of the blade-modes
+analysis (the symmetric modes of the paper's Table 2).
+"""
+
+from __future__ import annotations
+
+from typing import Optional
+
+import numpy as np
+
+from ..fem.beam import BeamElements
+from ..fem.sections import mesh_beam
+from ..model import Turbine
+from ..numerics.checks import check_elements, check_rotor_speed
+from ..numerics.jacobian import ColouredJacobian, block_tridiagonal_pattern
+from ..numerics.newton import newton
+from ..rigid import RigidSystem
+
+__all__ = ['SpinningBlade']
+
+
+class SpinningBlade:
+    """One blade clamped at radius ``hub_radius`` on a hub spinning at ``rotor_speed``.
+
+    Unknowns and residual rows are those of BeamElements (one beam). The root motion (root
+    frame b, constant) is the rigid system's (hawt_core.rigid) for blade 0 with the yaw locked
+    and the hub rigid: ``v = e Omega0 b2``, ``omega = Omega0 (sin(beta) b1 + cos(beta) b3)``
+    with the precone beta (the coned blade spins about the shaft, not about its own b3, which
+    lowers its centrifugal stiffening); undersling and tilt do not change it.
+    """
+
+    def __init__(self, turbine: Turbine, elements: Optional[int] = None,
+                 rotor_speed: Optional[float] = None):
+        from dataclasses import replace
+        self.turbine = turbine
+        self.rotor_speed = check_rotor_speed(turbine.rotor.speed if rotor_speed is None
+                                             else rotor_speed)
+        n_el = check_elements(turbine.blade.elements if elements is None else elements)
+        self.beam = BeamElements(mesh_beam(turbine.blade, n_el))
+        self.n = self.beam.n
+        clamped = replace(turbine, rotor=replace(turbine.rotor, speed=self.rotor_speed),
+                          hub=replace(turbine.hub, teeter=False, counterweight_mass=0.0),
+                          nacelle=replace(turbine.nacelle, yaw_free=False), tower=None,
+                          gravity=replace(turbine.gravity, enabled=False))
+        v, w = RigidSystem(clamped).root_motion(np.zeros(0), np.zeros(0), 0.0)
+        self.v, self.w = np.real(v[0]).astype(float), np.real(w[0]).astype(float)
+        self._jac = ColouredJacobian(block_tridiagonal_pattern(self.beam.pattern_blocks()))
+        self.differential = self.beam.differential
+
+    def residual(self, ydot, y, t=0.0):
+        return self.beam.residual(ydot[None], y[None], self.v[None], self.w[None])[0]
+
+    def jacobians(self, ydot, y, t=0.0):
+        C = self._jac.n_colours
+        rep = lambda a: np.broadcast_to(a, (C,) + np.shape(a))
+        V, W = rep(self.v), rep(self.w)
+        Jy = self._jac.batched(lambda Y: self.beam.residual(rep(ydot), Y, V, W), y)
+        Jd = self._jac.batched(lambda Yd: self.beam.residual(Yd, rep(y), V, W), ydot)
+        return Jy, Jd
+
+    def steady_state(self) -> np.ndarray:
+        z = np.zeros(self.n)
+        y, _ = newton(lambda y: self.residual(z, y), lambda y: self.jacobians(z, y)[0],
+                      self.beam.rigid_body_state(self.v, self.w), what="blade steady state")
+        return y

@@ -1,0 +1,146 @@
+"""The analysis subcommands of ``hawt``: ``blade-modes``, ``modes`` and ``campbell``."""
+
+from __future__ import annotations
+
+from .parser import (command, elements_arg, finite_float, load, marching_args, model_args,
+                     per_rev, positive_int, speeds_type, turbine_arg)
+from .status import ProgressLine
+
+
+# ---------------------------------------------------------------------------- blade-modes
+@command("blade-modes", help="modes of one blade clamped on the spinning hub",
+         description="Steady state, exact linearization and eigen-analysis of one blade "
+                     "clamped on the hub spinning at the rotor speed (the symmetric blade "
+                     "modes of the paper's Table 2). Prints a table, or JSON with --json.")
+def cmd_blade_modes(args) -> int:
+    from ..analyses.blade_modes import blade_modes
+    turbine = load(args.turbine)
+    result = blade_modes(turbine, elements=args.elements, rotor_speed=args.rotor_speed,
+                         count=args.count, method=args.method)
+    result.settings["turbine_file"] = args.turbine
+    if args.plot:
+        result.plot(args.plot)
+    if args.json:
+        print(result.to_json(indent=1))
+    else:
+        print(result.table())
+        if args.plot:
+            print(f"mode shapes written to {args.plot}")
+    return 0
+
+
+@cmd_blade_modes.arguments
+def _blade_modes_args(p):
+    model_args(p)
+    p.add_argument("--count", type=positive_int, default=None,
+                   help="number of lowest modes (default: all, or 30 for large models)")
+    p.add_argument("--method", choices=("auto", "dense", "sparse"), default="auto",
+                   help="eigen-solver: dense QZ with deflation, sparse shift-invert, or auto")
+    p.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    p.add_argument("--plot", metavar="FILE.png", default=None,
+                   help="write the mode shapes to this PNG file")
+
+
+@command("modes", help="Floquet modal analysis of the whole turbine (the paper's Table 2)",
+         description="Periodic steady state, exact periodic linearization, Floquet exponents "
+                     "(multi-blade coordinates for isotropic rotors with 3+ blades, monodromy "
+                     "by time marching with Fast Floquet, or Hill's method), dominant "
+                     "frequencies and automatic labels; with 3+ blades also fixed-frame "
+                     "frequencies and whirl. Prints a table like the paper's Table 2, or "
+                     "JSON with --json.")
+def cmd_modes(args) -> int:
+    from ..analyses.modal import modal_analysis
+    turbine = load(args.turbine)
+    status = ProgressLine(not args.json)
+    try:
+        result = modal_analysis(turbine, elements=args.elements, rotor_speed=args.rotor_speed,
+                                steps=args.steps, method=args.method,
+                                max_per_rev=args.max_per_rev, progress=status)
+    finally:
+        status.close()
+    result.settings["turbine_file"] = args.turbine
+    written = []
+    if args.plots:
+        import os
+        os.makedirs(args.plots, exist_ok=True)
+        written = result.plot(args.plots)
+    if args.json:
+        print(result.to_json(indent=1))
+    else:
+        print(result.table())
+        for w in written or []:
+            print(f"wrote {w}")
+    return 0
+
+
+@cmd_modes.arguments
+def _modes_args(p):
+    model_args(p)
+    marching_args(p)
+    p.add_argument("--max-per-rev", type=per_rev, default=None, metavar="F",
+                   help="band of Hill's method and multi-blade coordinates: modes below F "
+                        "per-rev (default 50)")
+    p.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    p.add_argument("--plots", metavar="DIR", default=None,
+                   help="write mode-shape pictures (PNG) into this folder")
+
+
+@command("campbell", help="Campbell diagram: Floquet modes over a range of rotor speeds",
+         description="Floquet modal analysis (as `hawt modes`) at COUNT rotor speeds from START "
+                     "to STOP rad/s, run in parallel worker processes, modes tracked from speed "
+                     "to speed by MAC (Hungarian assignment). Prints the frequency table; "
+                     "--plot writes the diagram (Hz vs rpm with 1P..nP rays, damping), --csv "
+                     "the data.")
+def cmd_campbell(args) -> int:
+    import concurrent.futures as cf
+    import os
+    from ..analyses.campbell import campbell
+    turbine = load(args.turbine)
+    status = ProgressLine(True)
+    workers = args.workers or os.cpu_count() or 1
+    with cf.ProcessPoolExecutor(max_workers=workers) as pool:
+        try:
+            result = campbell(turbine, args.speeds, elements=args.elements, steps=args.steps,
+                              method=args.method, executor=pool, progress=status,
+                              frame=args.frame, max_hz=args.max_hz)
+        finally:
+            status.close()
+    result.settings["workers"] = workers
+    print(result.table())
+    if args.csv:
+        result.to_csv(args.csv)
+        print(f"wrote {args.csv}")
+    if args.plot:
+        result.plot(args.plot, tracks="all" if args.all_modes else "table2")
+        print(f"wrote {args.plot}")
+    return 0
+
+
+@cmd_campbell.arguments
+def _campbell_args(p):
+    # let "--speeds -1:9:3" reach _speeds (and its one-line error naming START) instead of
+    # argparse taking "-1:9:3" for an option
+    import re
+    p._negative_number_matcher = re.compile(r"^-\d+$|^-\d*\.\d+$|^-[\d.eE+-]*:")
+    turbine_arg(p)
+    p.add_argument("--speeds", type=speeds_type, required=True, metavar="START:STOP:COUNT",
+                   help="rotor speeds [rad/s]: COUNT (>= 2) evenly spaced from START (> 0) to "
+                        "STOP")
+    elements_arg(p)
+    marching_args(p)
+    p.add_argument("--workers", type=positive_int, default=None, metavar="W",
+                   help="worker processes (default: one per CPU)")
+    p.add_argument("--plot", metavar="FILE.png", default=None,
+                   help="write the Campbell diagram to this PNG file")
+    p.add_argument("--csv", metavar="FILE", default=None,
+                   help="write speed, track, frequency, real part and damping rows to FILE")
+    p.add_argument("--frame", choices=("fixed", "rotating"), default=None,
+                   help="frequencies in the fixed frame (multi-blade coordinates; the default "
+                        "for 3+ blades) or the rotating frame (the default for 1 and 2)")
+    p.add_argument("--max-hz", type=finite_float("--max-hz", minimum=0.0, unit="Hz"),
+                   default=None, metavar="HZ",
+                   help="band [Hz] reported at every speed (default: what the highest speed "
+                        "resolves, 50 per-rev with the default steps)")
+    p.add_argument("--all-modes", action="store_true",
+                   help="plot every track (default: the Table 2 ones: yaw, teeter and the "
+                        "first two of each family and symmetry)")

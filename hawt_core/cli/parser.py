@@ -1,0 +1,152 @@
+"""The ``hawt`` parser: one argparse parser class whose errors are one line (CliError, exit
+status 2), the subcommand registry (``@command``), and the argument types and groups the
+commands share (each error names the field, the text given and what is allowed).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from typing import Callable, Optional
+
+__all__ = ['EXIT_USAGE', 'CliError', 'Parser', 'COMMANDS', 'command', 'positive_int', 'finite_float', 'turbine_arg', 'elements_arg', 'model_args', 'load', 'steps_type', 'per_rev', 'marching_args', 'speeds_type']
+
+
+EXIT_USAGE = 2
+
+
+class CliError(Exception):
+    """A user error: printed as one line, exit status 2."""
+
+
+class Parser(argparse.ArgumentParser):
+    def error(self, message):  # one line instead of usage + message
+        raise CliError(f"{self.prog}: {message}")
+
+
+#: name -> (help, add_arguments(parser), run(args) -> int)
+COMMANDS: dict = {}
+
+
+def command(name: str, help: str, description: Optional[str] = None):
+    """Register ``run(args)`` as subcommand ``name``; the decorated function gets an
+    ``arguments`` attribute for its argument definitions (set with ``@run.arguments``)."""
+    def deco(run: Callable):
+        entry = {"help": help, "description": description or help, "run": run,
+                 "arguments": lambda p: None}
+
+        def arguments(add: Callable):
+            entry["arguments"] = add
+            return add
+        run.arguments = arguments
+        COMMANDS[name] = entry
+        return run
+    return deco
+
+
+def positive_int(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not allowed; need an integer >= 1")
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"{v} is not allowed; need an integer >= 1")
+    return v
+
+
+def finite_float(field: str = "", minimum=None, unit: str = ""):
+    """argparse type: a finite float (>= minimum when given); the error names ``field``, the
+    text given and what is allowed."""
+    need = "a finite number" + (f" >= {minimum:g}" if minimum is not None else "") + \
+        (f" [{unit}]" if unit else "")
+
+    def conv(text: str) -> float:
+        try:
+            v = float(text)
+        except ValueError:
+            v = float("nan")
+        if not math.isfinite(v) or (minimum is not None and v < minimum):
+            raise argparse.ArgumentTypeError(
+                f"{field + ' ' if field else ''}{text!r} is not allowed; need {need}")
+        return v
+    return conv
+
+
+_rotor_speed = finite_float(minimum=0.0, unit="rad/s")
+
+
+def turbine_arg(p):
+    p.add_argument("turbine", nargs="?", default=None, metavar="TURBINE",
+                   help="turbine YAML file (default: the paper's Table 1 turbine)")
+
+
+def elements_arg(p):
+    p.add_argument("--elements", "-n", type=positive_int, default=None, metavar="N",
+                   help="finite elements per blade (default: the turbine file's)")
+
+
+def model_args(p):
+    """The arguments every analysis takes: the turbine file and the usual overrides."""
+    turbine_arg(p)
+    elements_arg(p)
+    p.add_argument("--rotor-speed", type=_rotor_speed, default=None, metavar="RAD_PER_S",
+                   help="rotor speed [rad/s] (default: the turbine file's)")
+
+
+def load(path):
+    """The turbine of ``path`` (None: the paper's Table 1 turbine)."""
+    from ..io import load_turbine
+    return load_turbine(path)
+
+
+# ---------------------------------------------------------------------------- modes
+def steps_type(text: str) -> int:
+    v = positive_int(text)
+    if not 8 <= v <= 1_000_000:
+        raise argparse.ArgumentTypeError(f"{v} is not allowed; need an integer from 8 to 1000000")
+    return v
+
+
+def per_rev(text: str) -> float:
+    v = finite_float("", unit="per-rev")(text)
+    if not 0 < v <= 1000:
+        raise argparse.ArgumentTypeError(f"{text!r} is not allowed; need a number > 0 and "
+                                         "<= 1000 [per-rev]")
+    return v
+
+
+def marching_args(p):
+    """The Floquet analysis' method options (modes, campbell)."""
+    p.add_argument("--steps", type=steps_type, default=None, metavar="K",
+                   help="time steps per rotor period of the marching methods (default: 400 "
+                        "radau, 1000 paper)")
+    p.add_argument("--method", choices=("auto", "radau", "paper", "hill"), default="auto",
+                   help="auto (default): multi-blade coordinates where they make the system "
+                        "time-invariant (3+ identical blades on a rigid hub, no gravity), "
+                        "else radau; radau: Radau IIA monodromy; paper: the paper's central "
+                        "differencing; hill: Hill's method (harmonic balance eigenproblem)")
+
+
+# ---------------------------------------------------------------------------- campbell
+def speeds_type(text: str):
+    """START:STOP:COUNT -> COUNT evenly spaced rotor speeds [rad/s]; errors name the field."""
+    parts = text.split(":")
+    if len(parts) != 3:
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not allowed; need START:STOP:COUNT [rad/s], e.g. 3:9:30")
+    start, stop = (finite_float(name, unit="rad/s")(part)
+                   for name, part in zip(("START", "STOP"), parts[:2]))
+    try:
+        count = int(parts[2])
+    except ValueError:
+        count = 0
+    if count < 2:
+        raise argparse.ArgumentTypeError(f"COUNT {parts[2]!r} is not allowed; need an "
+                                         "integer >= 2")
+    if start <= 0:
+        raise argparse.ArgumentTypeError(f"START {parts[0]!r} is not allowed; need a number "
+                                         "> 0 [rad/s]")
+    if stop < start:
+        raise argparse.ArgumentTypeError(f"STOP {parts[1]!r} is not allowed; need STOP >= "
+                                         f"START ({parts[0]})")
+    return [start + (stop - start) * i / (count - 1) for i in range(count)]

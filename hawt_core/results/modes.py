@@ -1,0 +1,218 @@
+"""Result types of the modal analyses: a Floquet mode of the whole turbine (Mode, with its
+fixed-frame view for three or more blades) and the analysis result (ModalResult: table,
+JSON, mode shapes, pictures); a mode of the clamped blade (BladeMode) and its result
+(BladeModesResult).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Optional
+
+import numpy as np
+
+from .tables import format_table
+
+if TYPE_CHECKING:
+    from ..assembly.turbine import TurbineModel
+    from ..fem.beam import BeamElements
+
+__all__ = ['Mode', 'ModalResult', 'BladeMode', 'BladeModesResult', 'mode_shape']
+
+
+@dataclass
+class Mode:
+    """One Floquet mode.  ``frequency_per_rev`` (and the other unprefixed fields) are the
+    dominant frequency of the motion that names the mode, the paper's convention: the
+    blades' deflection in the rotating frame for blade modes, the tower top or the yaw angle
+    (fixed frame) for tower and yaw modes.  With three or more blades the fixed-frame view
+    (multi-blade coordinates, as OpenFAST's MBC3 or HAWCStab2 report): ``fixed_frame_per_rev``
+    / ``fixed_frame_hz`` / ``fixed_frame_damping_ratio`` of the dominant fixed-frame harmonic,
+    ``whirl`` (collective, forward, backward, differential) and ``cyclic_order`` (k of the
+    dominant cyclic pair cos k psi, sin k psi; 0 collective, Nb/2 differential); None for
+    one- and two-bladed rotors."""
+
+    family: str
+    symmetry: Optional[str]
+    index: int
+    frequency_per_rev: float
+    real_per_rev: float
+    frequency_hz: float
+    damping_ratio: float
+    blade_phase_deg: Optional[float] = None
+    fixed_frame_per_rev: Optional[float] = None
+    fixed_frame_hz: Optional[float] = None
+    fixed_frame_damping_ratio: Optional[float] = None
+    whirl: Optional[str] = None
+    cyclic_order: Optional[int] = None
+    participation: dict = field(default_factory=dict, repr=False)
+    column: int = field(default=-1, repr=False)
+
+    @property
+    def label(self) -> str:
+        """e.g. 'flap 1 antisymmetric', 'teeter 1'."""
+        return f"{self.family} {self.index} {self.symmetry or ''}".strip()
+
+    def to_dict(self) -> dict:
+        return {"family": self.family, "symmetry": self.symmetry, "index": self.index,
+                "frequency_per_rev": self.frequency_per_rev, "real_per_rev": self.real_per_rev,
+                "frequency_hz": self.frequency_hz, "damping_ratio": self.damping_ratio,
+                "blade_phase_deg": self.blade_phase_deg,
+                "fixed_frame_per_rev": self.fixed_frame_per_rev,
+                "fixed_frame_hz": self.fixed_frame_hz,
+                "fixed_frame_damping_ratio": self.fixed_frame_damping_ratio,
+                "whirl": self.whirl, "cyclic_order": self.cyclic_order}
+
+
+@dataclass
+class ModalResult:
+    """Result of :func:`modal_analysis`; ``modes`` sorted by frequency then real part."""
+
+    modes: list
+    settings: dict
+    floquet: object = field(repr=False)
+    model: TurbineModel = field(repr=False)
+    steady: object = field(repr=False)
+    unresolved: int = 0
+    compute_time: float = 0.0
+    timings: dict = field(default_factory=dict)
+
+    def to_dict(self) -> dict:
+        return {"settings": self.settings, "modes": [m.to_dict() for m in self.modes],
+                "unresolved_modes": self.unresolved, "compute_time": self.compute_time}
+
+    def to_json(self, **kw) -> str:
+        return json.dumps(self.to_dict(), **kw)
+
+    def find(self, family: str, symmetry: Optional[str] = None, index: int = 1) -> Mode:
+        for m in self.modes:
+            if m.family == family and m.index == index and (symmetry is None or m.symmetry == symmetry):
+                return m
+        raise KeyError(f"mode: no {family} {symmetry or ''} {index} in this result")
+
+    def table(self) -> str:
+        s = self.settings
+        if s["method"] in ("radau", "paper"):
+            how = f"{s['method']}, {s['steps']} steps/period{', fast Floquet' if s['fast'] else ''}"
+        elif s.get("frame") == "multi-blade" and not s.get("hill_harmonics"):
+            how = "multi-blade coordinates, time-invariant: one eigenproblem"
+        else:
+            how = (f"Hill's method, {s.get('frame', 'rotating')} frame, "
+                   f"{s.get('hill_harmonics', 0)} harmonics")
+        header = (f"Dominant frequencies of the turbine '{s['turbine']}' (Floquet, {how}), "
+                  f"{s['elements']} elements per blade, rotor speed {s['rotor_speed']:.4g} rad/s")
+        footer = []
+        if self.unresolved:
+            if s["method"] in ("radau", "paper"):
+                footer.append(f"({self.unresolved} mesh modes above the temporal resolution "
+                              f"{s['resolution_per_rev']:.0f} per-rev not shown: raise --steps)")
+            else:
+                footer.append(f"({self.unresolved} modes above {s['resolution_per_rev']:.0f} "
+                              "per-rev not shown: raise --max-per-rev)")
+        footer.append(f"computed in {self.compute_time:.2f} s")
+        return format_table(header, self.modes, footer)
+
+    def shape_samples(self, mode: Mode):
+        """Periodic eigenvector of ``mode`` over one revolution: (times (M,), states (M, n)).
+
+        Marching the real Floquet solution from x(0) would grow with exp(eta t); these are the
+        periodic parts p(t) on every state row (complex), from the Floquet result samples.
+        """
+        fl = self.floquet
+        rows = fl.sample_rows
+        P = np.zeros((len(fl.sample_times), self.model.n), complex)
+        P[:, rows] = fl.periodic_sample(mode.column)
+        return fl.sample_times, P
+
+    def plot(self, path, modes=None):
+        """Mode-shape pictures (like the paper's Figs. 1-12) to a PNG file."""
+        from .plotting import plot_turbine_modes
+        return plot_turbine_modes(self, path, modes=modes)
+
+
+def _json_number(x):
+    x = float(x)
+    return x if np.isfinite(x) else None
+
+
+@dataclass
+class BladeMode:
+    """One mode of a blade clamped on the spinning hub. ``frequency_per_rev`` is None (NaN in memory) when not spinning."""
+
+    family: str
+    index: int
+    frequency_per_rev: float
+    frequency_hz: float
+    damping_ratio: float
+    eigenvalue: complex
+    shape: dict = field(repr=False)
+
+    @property
+    def frequency_rad_s(self) -> float:
+        return float(self.eigenvalue.imag)
+
+    def to_dict(self) -> dict:
+        return {"family": self.family, "index": self.index,
+                "frequency_per_rev": _json_number(self.frequency_per_rev),
+                "frequency_hz": _json_number(self.frequency_hz),
+                "damping_ratio": _json_number(self.damping_ratio), "shape": self.shape}
+
+
+@dataclass
+class BladeModesResult:
+    rotor_speed: float
+    elements: int
+    modes: list
+    root_force: np.ndarray
+    settings: dict
+
+    def to_dict(self) -> dict:
+        return {"settings": self.settings, "root_force": [float(f) for f in self.root_force],
+                "modes": [m.to_dict() for m in self.modes]}
+
+    def to_json(self, **kw) -> str:
+        return json.dumps(self.to_dict(), allow_nan=False, **kw)
+
+    def frequencies(self, family: Optional[str] = None) -> np.ndarray:
+        """Frequencies [rad/s] of the modes (of one family), ascending."""
+        return np.array([m.frequency_rad_s for m in self.modes
+                         if family is None or m.family == family])
+
+    def table(self) -> str:
+        lines = [f"Blade modes, clamped on the hub at {self.rotor_speed:.4g} rad/s, "
+                 f"{self.elements} elements ({self.settings.get('method', '')})",
+                 f"{'mode':<16}{'per-rev':>12}{'Hz':>12}{'damping':>12}"]
+        for m in self.modes:
+            pr = (f"{m.frequency_per_rev:>12.5f}" if np.isfinite(m.frequency_per_rev)
+                  else f"{'-':>12}")
+            lines.append(f"{m.family + ' ' + str(m.index):<16}{pr}"
+                         f"{m.frequency_hz:>12.5f}{m.damping_ratio:>12.2e}")
+        return "\n".join(lines)
+
+    def plot(self, path, count: int = 6):
+        """Mode shapes (flap u3, lead-lag u2, twist theta1 along the span) to a PNG file."""
+        from .plotting import plot_blade_modes
+        return plot_blade_modes(self, path, count=count)
+
+
+def mode_shape(beam: BeamElements, x: np.ndarray) -> dict:
+    """Real, normalized nodal shape of an eigenvector.
+
+    ``span`` [m]; ``displacement`` u (N+1, 3) and ``rotation`` theta (N+1, 3) in the root
+    frame b, scaled so that the largest of |u| and L |theta| is 1 (L the blade length, so that
+    units do not decide) and turned to be real there; ``flap`` (u3), ``lag`` (u2) and
+    ``twist`` (theta1) repeat the columns used for plotting.
+    """
+    u, th, _, _, _, _ = beam.nodal(x[None])
+    u, th = u[0], th[0]
+    L = beam.props.nodes[-1]
+    z = np.concatenate([u.ravel(), L * th.ravel()])
+    k = np.argmax(np.abs(z))
+    phase = z[k] / abs(z[k]) if abs(z[k]) > 0 else 1.0
+    scale = abs(z[k]) if abs(z[k]) > 0 else 1.0
+    u = np.real(u / phase) / scale
+    th = np.real(th / phase) / scale
+    return {"span": beam.props.nodes.tolist(), "displacement": u.tolist(),
+            "rotation": th.tolist(), "flap": u[:, 2].tolist(), "lag": u[:, 1].tolist(),
+            "twist": th[:, 0].tolist()}

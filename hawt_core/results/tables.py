@@ -1,0 +1,63 @@
+"""Mode tables as ``hawt modes`` prints them (the paper's Table 2 layout; the fixed-frame view
+for three or more blades), for hawt's Mode objects and the hawt_msgs/Mode message alike.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ['ordinal', 'mode_name', 'format_table']
+
+
+def ordinal(k: int) -> str:
+    """1 -> '1st', 2 -> '2nd', 3 -> '3rd', 4 -> '4th' (the index of a mode in its group)."""
+    return {1: "1st", 2: "2nd", 3: "3rd"}.get(k, f"{k}th")
+
+
+def mode_name(m) -> str:
+    """'1st antisymmetric flap', '1st backward-whirl lag', 'teeter', '1st side-side tower'."""
+    if m.family in ("yaw", "teeter"):
+        return m.family
+    return f"{ordinal(m.index)} {(m.symmetry or '')} {m.family}".replace("  ", " ")
+
+
+def _eigenvalue_text(freq: float, real: float) -> str:
+    if abs(freq) < 5e-7 and abs(real) < 5e-7:
+        return "0"
+    if abs(freq) < 5e-7:
+        return f"{real:+.6f}"
+    return f"{real:+.6f} ± {freq:.6f} i"
+
+
+def _fixed(m):
+    """The fixed-frame frequency of a mode (Mode or the hawt_msgs/Mode message, whose whirl
+    is empty for one and two blades), or None."""
+    f = getattr(m, "fixed_frame_per_rev", None)
+    return None if not getattr(m, "whirl", None) or f is None or not np.isfinite(f) else f
+
+
+def format_table(header: str, modes, footer=()) -> str:
+    """The modes as a table like the paper's Table 2. ``modes``: objects with the attributes
+    family, symmetry, index, frequency_per_rev, real_per_rev, frequency_hz, damping_ratio
+    (Mode, or the hawt_msgs/Mode message of the ROS service).  Three or more blades (modes
+    with fixed-frame fields): the fixed-frame eigenvalue, Hz and damping ratio, and the
+    rotating-frame dominant frequency beside them."""
+    fixed = bool(modes) and all(_fixed(m) is not None for m in modes)
+    if fixed:
+        lines = [header, f"{'mode':<30}{'fixed-frame eigenvalue (per-rev)':>34}{'Hz':>11}"
+                         f"{'damping':>11}{'rotating':>11}"]
+    else:
+        lines = [header, f"{'mode':<30}{'eigenvalue (per-rev)':>28}{'Hz':>11}{'damping':>11}"]
+    for m in modes:
+        name = mode_name(m)
+        if fixed:
+            ev = _eigenvalue_text(m.fixed_frame_per_rev, m.real_per_rev)
+            zeta = m.fixed_frame_damping_ratio
+            damping = f"{zeta:>11.2e}" if np.isfinite(zeta) else f"{'-':>11}"
+            lines.append(f"{name:<30}{ev:>34}{m.fixed_frame_hz:>11.5f}{damping}"
+                         f"{m.frequency_per_rev:>11.5f}")
+            continue
+        ev = _eigenvalue_text(m.frequency_per_rev, m.real_per_rev)
+        damping = f"{m.damping_ratio:>11.2e}" if np.isfinite(m.damping_ratio) else f"{'-':>11}"
+        lines.append(f"{name:<30}{ev:>28}{m.frequency_hz:>11.5f}{damping}")
+    return "\n".join(lines + list(footer))
