@@ -2,9 +2,9 @@
 ``call`` and ``echo`` (the ``ros2 bag`` / ``ros2 service call`` / ``ros2 topic echo`` a
 PyPI-only ROS 2 installation lacks, for hawt's needs).
 
-``hawt`` finds these through the entry-point group ``hawt.commands`` (hawt_ros/commands.py,
-which imports this module only when one of them runs); this module itself imports rclpy only
-inside the commands that talk to ROS (``hawt info`` works with the MCAP libraries alone).
+``hawt`` finds these through the entry-point group ``hawt.commands`` (hawt_ros/commands.py);
+this module imports rclpy only inside the commands that talk to ROS (``hawt info`` works with
+the MCAP libraries alone).
 
     hawt record run.mcap [--topics /joint_states ...] [--duration S]
     hawt play run.mcap [--rate R] [--loop] [--wait-for-subscribers S]
@@ -23,12 +23,19 @@ import threading
 import time
 from typing import Any, Dict, List, Optional
 
-__all__ = ["COMMANDS", "build_parser", "main", "message_to_plain", "modes_to_json",
+__all__ = ["HELP", "build_parser", "main", "message_to_plain", "modes_to_json",
            "format_modes_table"]
 
 from hawt_core.cli.parser import EXIT_USAGE, CliError, Parser
 
-from .commands import HELP as COMMANDS
+#: name -> one-line help
+HELP = {
+    "record": "record live ROS 2 topics into an MCAP file (rosbag2 layout)",
+    "play": "republish the messages of an MCAP file with their original timing",
+    "info": "summarize an MCAP file (topics, types, counts, duration)",
+    "call": "call the hawt node's modal_analysis service (or action) and print the modes",
+    "echo": "print the messages arriving on a ROS 2 topic",
+}
 
 EXIT_FAIL = 1
 DEFAULT_IGNORED = ("/rosout", "/parameter_events")
@@ -156,7 +163,7 @@ def _qos_for(node, topic: str, depth: int = 100):
 
 # ============================================================================ info
 def cmd_info(args) -> int:
-    from .mcap_io import bag_info, format_bag_info
+    from .bag import bag_info, format_bag_info
 
     try:
         info = bag_info(args.file)
@@ -176,7 +183,7 @@ def _info_args(p):
 
 # ============================================================================ record
 def cmd_record(args) -> int:
-    from .mcap_io import BagWriter, DefinitionNotFound, message_class
+    from .bag import BagWriter, DefinitionNotFound, message_class
 
     wanted = None
     if args.topics:
@@ -272,7 +279,7 @@ def _record_args(p):
 
 # ============================================================================ play
 def cmd_play(args) -> int:
-    from .mcap_io import BagReader, bag_info, message_class
+    from .bag import BagReader, bag_info, message_class
 
     if not (args.rate > 0 and math.isfinite(args.rate)):
         raise CliError(f"hawt play: --rate: {args.rate!r} is not allowed; need a number > 0")
@@ -469,7 +476,7 @@ def _call_args(p):
 # ============================================================================ echo
 def cmd_echo(args) -> int:
     import yaml
-    from .mcap_io import message_class
+    from .bag import message_class
 
     topic = args.topic if args.topic.startswith("/") else "/" + args.topic
     if args.count is not None and args.count < 1:
@@ -535,7 +542,7 @@ _RUN = {"record": (cmd_record, _record_args), "play": (cmd_play, _play_args),
 def build_parser(prog: str = "hawt") -> argparse.ArgumentParser:
     parser = Parser(prog=prog, description="ROS 2 tools of hawt")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
-    for name, help_text in COMMANDS.items():
+    for name, help_text in HELP.items():
         p = sub.add_parser(name, help=help_text, description=help_text)
         _RUN[name][1](p)
     return parser

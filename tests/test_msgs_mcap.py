@@ -1,4 +1,4 @@
-"""hawt_msgs interfaces and the MCAP layer (hawt_ros/mcap_io.py).
+"""hawt_msgs interfaces and the MCAP layer (hawt_ros/bag.py).
 
 These need the ROS 2 wheels and the built msg_defs/hawt_msgs package, which
 scripts/bootstrap.sh installs. Without rclpy they are skipped with the reason, unless
@@ -39,8 +39,10 @@ except Exception as exc:  # ImportError, or a missing shared library of the ROS 
                   "scripts/bootstrap.sh sets up")
 require_ros(_ROS_ERROR)      # skips the module, or fails it when HAWT_REQUIRE_ROS=1
 
-from hawt_ros import mcap_io  # noqa: E402
-from hawt_ros.mcap_io import BagReader, BagWriter, bag_info, format_bag_info  # noqa: E402
+from hawt_ros import bag  # noqa: E402
+from hawt_ros.bag import serialization as bag_serialization  # noqa: E402
+from hawt_ros.bag import writer as bag_writer  # noqa: E402
+from hawt_ros.bag import BagReader, BagWriter, bag_info, format_bag_info  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
 T0 = 1_700_000_000_000_000_000  # ns
@@ -194,7 +196,7 @@ def test_interfaces_import_and_roundtrip():
     assert (req.rotor_speed, req.elements, req.steps, req.method) == (0.0, 0, 0, "")
     # the action's generated service/message types exist (rclpy.action needs them)
     assert ModalAnalysisAction.Impl.SendGoalService and ModalAnalysisAction.Impl.FeedbackMessage
-    assert mcap_io.type_name_of(ModalAnalysisAction.Feedback()) == \
+    assert bag.type_name_of(ModalAnalysisAction.Feedback()) == \
         "hawt_msgs/action/ModalAnalysis_Feedback"
 
 
@@ -203,34 +205,34 @@ def test_rclpy_action_module_imports():
 
 
 def test_message_definition_text():
-    text = mcap_io.message_definition("hawt_msgs/msg/BladeDeflection")
+    text = bag.message_definition("hawt_msgs/msg/BladeDeflection")
     own = (REPO / "msg_defs/hawt_msgs/msg/BladeDeflection.msg").read_text()
     assert text.startswith(own.rstrip("\n"))
     sep = "=" * 80
     for dep in ("std_msgs/Header", "builtin_interfaces/Time", "geometry_msgs/Vector3"):
         assert text.count(f"{sep}\nMSG: {dep}\n") == 1, dep
     # services' and actions' parts are messages too
-    resp = mcap_io.message_definition("hawt_msgs/srv/ModalAnalysis_Response")
+    resp = bag.message_definition("hawt_msgs/srv/ModalAnalysis_Response")
     assert "MSG: hawt_msgs/Mode\n" in resp and "MSG: hawt_msgs/ModeShape\n" in resp
-    assert mcap_io.message_definition("hawt_msgs/action/ModalAnalysis_Feedback").startswith(
+    assert bag.message_definition("hawt_msgs/action/ModalAnalysis_Feedback").startswith(
         "# Feedback")
-    h = mcap_io.type_hash("sensor_msgs/msg/JointState")
+    h = bag.type_hash("sensor_msgs/msg/JointState")
     assert h is not None and h.startswith("RIHS01_") and len(h) == 7 + 64
-    assert mcap_io.type_hash("hawt_msgs/msg/BladeDeflection").startswith("RIHS01_")
+    assert bag.type_hash("hawt_msgs/msg/BladeDeflection").startswith("RIHS01_")
 
 
 def test_serialize_is_readable_by_rosbags_where_rclpy_pads():
-    """rclpy pads empty float64[]: rosbags rejects that; mcap_io.serialize does not."""
+    """rclpy pads empty float64[]: rosbags rejects that; bag.serialize does not."""
     from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
     store = get_typestore(Stores.EMPTY)
     cases = [joint_state(1, T0), blade_deflection(3, 0, T0), mode(0),
              JointState(name=["a"], position=[], velocity=[], effort=[])]
     for msg in cases:
-        tn = mcap_io.type_name_of(msg)
+        tn = bag.type_name_of(msg)
         if tn not in store.types:
-            store.register(get_types_from_msg(mcap_io.message_definition(tn), tn))
-        data = mcap_io.serialize(msg)
+            store.register(get_types_from_msg(bag.message_definition(tn), tn))
+        data = bag.serialize(msg)
         assert deserialize_message(data, type(msg)) == msg
         decoded = store.deserialize_cdr(data, tn)  # raises on a size mismatch
         if isinstance(msg, JointState):
@@ -238,9 +240,9 @@ def test_serialize_is_readable_by_rosbags_where_rclpy_pads():
             assert list(decoded.position) == list(msg.position)
     # messages without empty 8-byte sequences keep rclpy's own bytes
     full = JointState(name=["a"], position=[1.0], velocity=[2.0], effort=[3.0])
-    assert not mcap_io._has_empty_8byte_sequence(full)
-    assert mcap_io._has_empty_8byte_sequence(joint_state(0, T0))  # effort=[]
-    assert len(mcap_io.serialize(full)) == len(serialize_message(full))
+    assert not bag_serialization._has_empty_8byte_sequence(full)
+    assert bag_serialization._has_empty_8byte_sequence(joint_state(0, T0))  # effort=[]
+    assert len(bag.serialize(full)) == len(serialize_message(full))
 
 
 # ----------------------------------------------------------------------------------------
@@ -353,10 +355,10 @@ def test_rosbag2_records(written_bag):
             assert ch.message_encoding == "cdr"
             assert schema.encoding == "ros2msg"
             assert schema.name.count("/") == 2
-            assert schema.data.decode() == mcap_io.message_definition(schema.name)
+            assert schema.data.decode() == bag.message_definition(schema.name)
             qos = yaml.safe_load(ch.metadata["offered_qos_profiles"])
             assert qos[0]["reliability"] == "reliable" and qos[0]["depth"] == 10
-            assert ch.metadata["topic_type_hash"] == mcap_io.type_hash(schema.name)
+            assert ch.metadata["topic_type_hash"] == bag.type_hash(schema.name)
         assert {c.compression for c in summary.chunk_indexes} == {"zstd"}
         assert len(summary.chunk_indexes) > 3
         metadata = {m.name: m.metadata for m in reader.iter_metadata()}
@@ -377,7 +379,7 @@ def test_bag_info(written_bag):
     assert info["message_count"] == len(messages)
     assert info["topics"]["/markers"] == {
         "type": "visualization_msgs/msg/MarkerArray", "count": N_STEPS,
-        "type_hash": mcap_io.type_hash("visualization_msgs/msg/MarkerArray"),
+        "type_hash": bag.type_hash("visualization_msgs/msg/MarkerArray"),
         "message_encoding": "cdr"}
     assert info["start_time"] == T0
     assert info["end_time"] == T0 + (N_STEPS - 1) * DT + 3
@@ -425,7 +427,7 @@ def test_truncated_file_recovers_complete_chunks(written_bag, tmp_path):
 
 WRITER_CHILD = """
 import sys, time
-from hawt_ros.mcap_io import BagWriter
+from hawt_ros.bag import BagWriter
 from sensor_msgs.msg import JointState
 path, mode = sys.argv[1], sys.argv[2]
 w = BagWriter(path, chunk_size=2048, chunk_interval=0.3, turbine_yaml="name: t\\n")
@@ -510,7 +512,7 @@ def test_writer_api_edges(tmp_path):
     with pytest.raises(ValueError):
         w.write("/deflection", JointState())  # a topic keeps its type
     w.write_serialized("/deflection", "hawt_msgs/msg/BladeDeflection",
-                       mcap_io.serialize(blade_deflection(1, 0, T0)), T0)
+                       bag.serialize(blade_deflection(1, 0, T0)), T0)
     w.write("/settings", AnalysisSettings(turbine="x"))  # default log time: wall clock
     w.close()
     w.close()  # idempotent
@@ -549,7 +551,7 @@ def test_exception_during_chunk_write_leaves_consistent_file(tmp_path, monkeypat
     w = BagWriter(path, chunk_size=1 << 30, chunk_interval=None)
     for i in range(10):
         w.write("/joint_states", joint_state(i, T0 + i), T0 + i)
-    real_write = mcap_io._DirectFile.write
+    real_write = bag_writer._DirectFile.write
     calls = {"n": 0}
 
     def failing_write(self, data):
@@ -558,12 +560,32 @@ def test_exception_during_chunk_write_leaves_consistent_file(tmp_path, monkeypat
             raise KeyboardInterrupt
         return real_write(self, data)
 
-    monkeypatch.setattr(mcap_io._DirectFile, "write", failing_write)
+    monkeypatch.setattr(bag_writer._DirectFile, "write", failing_write)
     with pytest.raises(KeyboardInterrupt):
         w.flush()
-    monkeypatch.setattr(mcap_io._DirectFile, "write", real_write)
+    monkeypatch.setattr(bag_writer._DirectFile, "write", real_write)
     w.write("/joint_states", joint_state(10, T0 + 10), T0 + 10)
     w.close()
     read, _ = rosbags_read(path)
     assert [t for _, _, t, _ in read] == [T0 + i for i in range(11)]
     assert bag_info(path)["message_count"] == 11
+
+
+def test_short_writes_of_the_operating_system_are_completed(tmp_path, monkeypatch):
+    """Reference: the MCAP CRCs (mcap's validating reader) and rosbags. os.write may write
+    fewer bytes than given; with at most 7 bytes per call the file is still byte-complete:
+    every message once, in order, all CRCs valid."""
+    from mcap.reader import make_reader
+
+    real_write = bag_writer._DirectFile.write
+    monkeypatch.setattr(bag_writer._DirectFile, "write",
+                        lambda self, data: real_write(self, bytes(data[:7])))
+    path = tmp_path / "short.mcap"
+    with BagWriter(path, chunk_size=512, chunk_interval=None, turbine_yaml="name: t\n") as w:
+        for i in range(40):
+            w.write("/joint_states", joint_state(i, T0 + i), T0 + i)
+    with open(path, "rb") as f:
+        got = [m.log_time for _, _, m in make_reader(f, validate_crcs=True).iter_messages()]
+    assert got == [T0 + i for i in range(40)]
+    read, _ = rosbags_read(path)
+    assert len(read) == 40 and bag_info(path)["chunks"] > 1

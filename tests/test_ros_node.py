@@ -313,7 +313,7 @@ def test_analysis_runner_cache_coalescing_cancel(monkeypatch):
     """The node's analysis runner (no ROS): identical requests share one job, a repeat right
     after the answer is served from the cache, a running job is cancelled (worker stopped)."""
     from hawt_core.io import load_turbine
-    from hawt_ros.analysis import AnalysisRunner
+    from hawt_ros.analysis_workers import AnalysisRunner
 
     # the forkserver (started on first use) and its workers inherit this environment
     monkeypatch.setenv("HAWT_ROS_FAKE", str(FAKES))
@@ -565,7 +565,7 @@ def test_concurrent_service_calls_quarter_invalid(spawn):
 
 @ros
 def test_sigterm_during_recording_leaves_finalized_mcap(spawn, tmp_path):
-    from hawt_ros.mcap_io import BagReader, bag_info
+    from hawt_ros.bag import BagReader, bag_info
 
     bag = tmp_path / "run.mcap"
     node, cli = spawn(dict(REAL_TIME, record=str(bag)))
@@ -612,7 +612,7 @@ def test_sigterm_during_recording_leaves_finalized_mcap(spawn, tmp_path):
 
 @ros
 def test_sigkill_leaves_readable_mcap(spawn, tmp_path):
-    from hawt_ros.mcap_io import BagReader, bag_info
+    from hawt_ros.bag import BagReader, bag_info
 
     bag = tmp_path / "killed.mcap"
     node, cli = spawn(dict(REAL_TIME, record=str(bag)))
@@ -637,7 +637,7 @@ def test_sigkill_leaves_readable_mcap(spawn, tmp_path):
 def test_play_reproduces_topics(ros_env, tmp_path):
     """A recorded file played back by `hawt play` reaches a subscriber with its content and
     its original timing."""
-    from hawt_ros.mcap_io import BagWriter
+    from hawt_ros.bag import BagWriter
     from std_msgs.msg import Header
     from builtin_interfaces.msg import Time
 
@@ -759,7 +759,7 @@ def test_runtime_parameter_changes(spawn, tmp_path):
     print(f"\nafter publish_rate:=4.0: {rate:.2f} Hz")
     assert 3.0 <= rate <= 5.0
     # recording switched on and off at runtime
-    from hawt_ros.mcap_io import bag_info
+    from hawt_ros.bag import bag_info
 
     bag = tmp_path / "runtime.mcap"
     assert set_param("record", str(bag)).successful

@@ -135,7 +135,7 @@ def test_run_script_node_modes_ctrl_c(tmp_path):
         assert rc == 0, out
         assert "Bag state:" in out and "finalized" in out, out      # the script's `hawt info`
 
-        from hawt_ros.mcap_io import bag_info
+        from hawt_ros.bag import bag_info
         info = bag_info(str(mcap))
         assert info["finalized"] and not info["truncated"], info
         assert info["topics"]["/joint_states"]["type"] == "sensor_msgs/msg/JointState", info

@@ -26,13 +26,15 @@ PLUGIN_GROUP = "hawt.commands"
 
 def plugin_commands() -> dict:
     """{name: {"help", "run"}} of the subcommands registered under PLUGIN_GROUP (a plugin
-    that fails to load is left out: hawt's own commands keep working)."""
+    that fails to load is left out with a warning on stderr: hawt's own commands keep
+    working)."""
     out = {}
     for ep in entry_points(group=PLUGIN_GROUP):
         try:
             out.update(ep.load())
-        except Exception:  # noqa: BLE001 - a broken plugin must not break hawt
-            continue
+        except Exception as exc:  # noqa: BLE001 - a broken plugin must not break hawt
+            print(f"hawt: warning: the subcommands of {ep.value} ({ep.name}) are not "
+                  f"available: {type(exc).__name__}: {exc}", file=sys.stderr)
     return out
 
 

@@ -5,7 +5,7 @@ and columns (docs/floquet.md, "Low-rank time variation").
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Optional
+from typing import Optional
 
 import numpy as np
 import scipy.sparse as sp
@@ -13,9 +13,6 @@ import scipy.sparse.linalg as spla
 
 from ...numerics.woodbury import equilibrate_rows_columns, equilibrated_solve
 from .coefficients import FourierCoefficients
-
-if TYPE_CHECKING:  # the steppers import this module; the annotation only names them
-    from .steppers import _Stepper
 
 
 # --------------------------------------------------------------------------------------------
@@ -78,9 +75,12 @@ class _LowRank:
     (their columns Cs, rows Rs removed), R(t) = R0 + P_Rs F(beta) + G(beta) P_C^T.  Woodbury:
     L^{-1} = L0^{-1} - L0^{-1} U (I + V^T L0^{-1} U)^{-1} V^T L0^{-1},  U = [P_Rs, b],
     V^T = [a; P_Cs^T]; every product with L0^{-1} is precomputed, so a step costs one n x n
-    by n x d product plus products with the r = |Rs| + |Cs| low-rank directions."""
+    by n x d product plus products with the r = |Rs| + |Cs| low-rank directions.
 
-    def __init__(self, st: "_Stepper", h: float, R, C, cEv, cAv):
+    ``st`` (here and in :meth:`check`): the stepper (hawt_core.solvers.floquet.steppers)
+    whose stage matrices are updated; it imports this module, so it is not named here."""
+
+    def __init__(self, st, h: float, R, C, cEv, cAv):
         c = st.coeffs
         n = c.dae.n
         ns = st.stage_times(0.0, h).size
@@ -206,7 +206,7 @@ class _LowRank:
             return w
         return w - self.Wp @ y[:self.nR] - np.tensordot(beta, self.WB, 1) @ y[self.nR:]
 
-    def check(self, st: "_Stepper", X: np.ndarray, h: float, betas: np.ndarray,
+    def check(self, st, X: np.ndarray, h: float, betas: np.ndarray,
               ts: np.ndarray) -> bool:
         """Conditioning of the (equilibrated) capacitance matrices of all steps, and the first
         step's stage solution for a few combinations of the columns of X against a factorized

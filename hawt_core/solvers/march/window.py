@@ -43,6 +43,8 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
+from ...numerics.woodbury import row_column_capacitance
+
 
 def midpoint_arguments(x, prev, di, h):
     """(ydot, y) arguments of the residual at the midpoint of implicit-midpoint steps of size
@@ -199,9 +201,8 @@ class WindowSolver:
         # A = A0 + U V^T, U = [dAc, E_rc], V^T = [E_rc^T; dR at columns kc]
         Z = np.concatenate([Ainv0 @ dAc, Ainv0[:, rc]], axis=1)               # A0^-1 U
         W = np.concatenate([Ainv0[rc], dR @ Ainv0[kc]], axis=0)               # V^T A0^-1
-        C = np.eye(2 * nr) + np.concatenate([Z[rc], dR @ Z[kc]], axis=0)      # I + V^T A0^-1 U
         try:
-            ZC = Z @ np.linalg.inv(C)
+            ZC = Z @ row_column_capacitance(Z, dR, rc, kc)
         except np.linalg.LinAlgError as exc:
             raise WindowFailure(f"singular rigid-body update ({exc})") from exc
         Ainv = Ainv0 - ZC @ W

@@ -260,7 +260,7 @@ class AnalysisRunner:
         """Start the forkserver with the analysis code preloaded (call before threads that
         matter exist; optional: it starts on first use otherwise)."""
         ctx = multiprocessing.get_context("forkserver")
-        ctx.set_forkserver_preload(["__main__", "hawt_ros.analysis", "hawt_ros.backend",
+        ctx.set_forkserver_preload(["__main__", "hawt_ros.analysis_workers", "hawt_ros.backend",
                                     "numpy", "scipy.sparse", "scipy.linalg",
                                     "hawt_core.assembly", "hawt_core.analyses.modal"])
         from multiprocessing import forkserver
