@@ -58,6 +58,7 @@ class StateLayout:
 
     @property
     def has_tower(self) -> bool:
+        """Whether the tower is flexible (its unknowns follow the last blade)."""
         return self._tower is not None
 
     def tower(self) -> BladeLayout:
@@ -83,9 +84,12 @@ class StateLayout:
             root_moment=off + 3 + np.arange(3))
 
     def blade_offset(self, k: int) -> int:
+        """Index of blade k's first unknown (its root force)."""
         return self.n_rigid + k * self.n_beam
 
     def blade(self, k: int) -> BladeLayout:
+        """Index arrays of blade k's unknowns (u, theta in its root frame b; V, Omega, F, M
+        in the deformed section frames; the root loads on the hub in frame b)."""
         if not 0 <= k < self.n_blades:
             raise IndexError(f"blade: {k} is not allowed; this turbine has blades 0..{self.n_blades - 1}")
         return self._blades[k]
@@ -101,6 +105,7 @@ class StateLayout:
                            f"{sorted(self._index)}") from None
 
     def names(self) -> list:
+        """Name of every unknown in order, e.g. ``yaw``, ``blade0.root_force.1``, ``blade0.u[1].3``."""
         out = list(self.rigid_names)
         for k in range(self.n_blades):
             out += self._beam_names(self._blades[k], self.blade_offset(k), self.n_beam,

@@ -48,9 +48,13 @@ class SpinningBlade:
         self.differential = self.beam.differential
 
     def residual(self, ydot, y, t=0.0):
+        """Beam residual (n,) of the blade whose root moves with the hub's steady motion
+        (root velocity v [m/s], angular velocity w [rad/s], root frame b); ``t`` unused (the
+        motion is steady)."""
         return self.beam.residual(ydot[None], y[None], self.v[None], self.w[None])[0]
 
     def jacobians(self, ydot, y, t=0.0):
+        """Exact (complex-step, coloured) dR/dy and dR/dydot, sparse (n, n)."""
         C = self._jac.n_colours
         rep = lambda a: np.broadcast_to(a, (C,) + np.shape(a))
         V, W = rep(self.v), rep(self.w)
@@ -59,6 +63,8 @@ class SpinningBlade:
         return Jy, Jd
 
     def steady_state(self) -> np.ndarray:
+        """Steady deflected state (n,) of the spinning blade (Newton from the rigid-body
+        state: V = v + w x r, Omega = w in the section frames)."""
         z = np.zeros(self.n)
         y, _ = newton(lambda y: self.residual(z, y), lambda y: self.jacobians(z, y)[0],
                       self.beam.rigid_body_state(self.v, self.w), what="blade steady state")

@@ -59,6 +59,8 @@ class PeriodicSteadyState:
         return cached[1], cached[2]
 
     def at(self, t: float) -> np.ndarray:
+        """State y(t) (n,) [SI units of the state layout] by the Fourier series of the
+        samples; ``t`` [s], any value (periodic)."""
         if self.constant:
             return self.states[0].copy()
         c, k = self._fourier()
@@ -66,6 +68,7 @@ class PeriodicSteadyState:
         return np.real(ph @ c)
 
     def rate_at(self, t: float) -> np.ndarray:
+        """Rate dy/dt (n,) [state units / s] at ``t`` [s] (derivative of the series)."""
         if self.constant:
             return np.zeros(self.states.shape[1])
         c, k = self._fourier()

@@ -95,7 +95,7 @@ class DirectCoefficients:
             else:
                 self.pA = new
             self.version += 1
-            raise _PatternChanged()
+            raise PatternChanged()
         return d
 
     def data_at(self, times) -> tuple[np.ndarray, np.ndarray]:
@@ -109,7 +109,7 @@ class DirectCoefficients:
         return Ed, Ad
 
 
-class _PatternChanged(Exception):
+class PatternChanged(Exception):
     pass
 
 

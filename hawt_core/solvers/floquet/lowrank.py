@@ -17,16 +17,16 @@ from .coefficients import FourierCoefficients
 
 # --------------------------------------------------------------------------------------------
 # low-rank time variation: one factorization of the mean stage matrix + Woodbury updates
-_LOWRANK_VAR_TOL = 1e-13      # harmonics below this x the row's largest coefficient: constant
+LOWRANK_VAR_TOL = 1e-13      # harmonics below this x the row's largest coefficient: constant
 
-_LOWRANK_MAX_FRACTION = 8     # automatic: varying rows + columns <= n / 8
+LOWRANK_MAX_FRACTION = 8     # automatic: varying rows + columns <= n / 8
 
-_LOWRANK_MIN_N = 64           # automatic: not for smaller systems
+LOWRANK_MIN_N = 64           # automatic: not for smaller systems
 
-_LOWRANK_CHECK_TOL = 1e-7     # first step vs a factorized step (relative): gross errors
+LOWRANK_CHECK_TOL = 1e-7     # first step vs a factorized step (relative): gross errors
 
 
-def _varying_cover(coeffs: FourierCoefficients, tol: float, max_size: Optional[int] = None):
+def varying_cover(coeffs: FourierCoefficients, tol: float, max_size: Optional[int] = None):
     """Rows R and columns C (sorted int arrays) such that every entry of E(t), A(t) with a
     non-negligible time variation lies in a row of R or a column of C (greedy cover), and the
     harmonic coefficients (rows 1.. of cE, cA) with the negligible variations set to zero.
@@ -65,7 +65,7 @@ def _varying_cover(coeffs: FourierCoefficients, tol: float, max_size: Optional[i
             cleaned[0], cleaned[1])
 
 
-class _LowRank:
+class LowRankUpdate:
     """One step x1 = out(L(t)^{-1} R(t) x0) with L(t) = L0 + P_Rs a(t) + b(t) P_Cs^T.
 
     L0, R0: stage and right-hand-side matrices of the mean coefficients (one sparse LU per
@@ -228,5 +228,5 @@ class _LowRank:
         z = self.stage_solution(Xc, betas[0])
         err = float(np.linalg.norm(z - ref) / max(np.linalg.norm(ref), 1e-300))
         st.lowrank_info.update(check=err, max_capacitance_cond=float(np.max(conds)))
-        return bool(err <= _LOWRANK_CHECK_TOL and np.all(np.isfinite(conds))
+        return bool(err <= LOWRANK_CHECK_TOL and np.all(np.isfinite(conds))
                     and np.max(conds) < 1e12)

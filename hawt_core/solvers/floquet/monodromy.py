@@ -15,7 +15,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from .coefficients import DirectCoefficients, FourierCoefficients, LinearPeriodicDAE
-from .steppers import RadauStepper, _Stepper, make_stepper
+from .steppers import RadauStepper, Stepper, make_stepper
 
 __all__ = ['DEFAULT_STEPS', 'Monodromy', 'monodromy']
 
@@ -26,7 +26,7 @@ _SETTLE_STEPS = 3
 
 
 def _settle(coeffs, h: float, t_end: float, lowrank: Optional[bool] = False,
-            stepper: Optional[_Stepper] = None) -> tuple[np.ndarray, int]:
+            stepper: Optional[Stepper] = None) -> tuple[np.ndarray, int]:
     """_SETTLE_STEPS Radau IIA steps of length h ending at t_end, applied to all differential
     unit vectors (the algebraic columns are irrelevant: a step depends on x0 only via E x0).
     ``stepper``: a Radau stepper to use (and whose low-rank data for h to share).  Returns the
@@ -42,7 +42,7 @@ def _settle(coeffs, h: float, t_end: float, lowrank: Optional[bool] = False,
 
 
 def _consistent_basis(coeffs, h: float, t_end: float, dynamic_dim: Optional[int],
-                      lowrank: Optional[bool] = False, stepper: Optional[_Stepper] = None):
+                      lowrank: Optional[bool] = False, stepper: Optional[Stepper] = None):
     """Basis Z (n x d) of consistent values at t_end, with Z_D orthonormal.
 
     d = numerical rank of the settling map with tiny steps (h/100): it is a near-projector onto

@@ -13,9 +13,9 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .coefficients import FourierCoefficients, _PatternChanged
-from .lowrank import (_LOWRANK_MAX_FRACTION, _LOWRANK_MIN_N, _LOWRANK_VAR_TOL, _LowRank,
-                      _varying_cover)
+from .coefficients import FourierCoefficients, PatternChanged
+from .lowrank import (LOWRANK_MAX_FRACTION, LOWRANK_MIN_N, LOWRANK_VAR_TOL, LowRankUpdate,
+                      varying_cover)
 
 __all__ = ['RADAU_IIA', 'RadauStepper', 'MidpointStepper', 'make_stepper', 'STAGE_ORDERING']
 
@@ -62,7 +62,7 @@ class _Assembler:
         return sp.csc_matrix((data, self.indices, self.indptr), shape=self.shape)
 
 
-class _Stepper:
+class Stepper:
     """One-step maps of E(t) x' = A(t) x, many right-hand sides at once (the marching of a
     method: its stage system, stage times and where x1 sits in the stage solution come from
     the subclass)."""
@@ -118,17 +118,17 @@ class _Stepper:
             if self.version != self.coeffs.version:
                 self._build()
             n = self.coeffs.dae.n
-            R, C, cEv, cAv = _varying_cover(
-                self.coeffs, _LOWRANK_VAR_TOL,
-                None if self.lowrank else n // _LOWRANK_MAX_FRACTION)
+            R, C, cEv, cAv = varying_cover(
+                self.coeffs, LOWRANK_VAR_TOL,
+                None if self.lowrank else n // LOWRANK_MAX_FRACTION)
             self.lowrank_info.update(rows=R, cols=C)
-            if self.lowrank is None and (R.size + C.size) * _LOWRANK_MAX_FRACTION > n:
+            if self.lowrank is None and (R.size + C.size) * LOWRANK_MAX_FRACTION > n:
                 why = (f"time variation not confined to few rows/columns "
-                       f"(more than {n // _LOWRANK_MAX_FRACTION} of n = {n})")
-            elif self.lowrank is None and n < _LOWRANK_MIN_N:
-                why = f"small system (n = {n} < {_LOWRANK_MIN_N}): factorizing is as fast"
+                       f"(more than {n // LOWRANK_MAX_FRACTION} of n = {n})")
+            elif self.lowrank is None and n < LOWRANK_MIN_N:
+                why = f"small system (n = {n} < {LOWRANK_MIN_N}): factorizing is as fast"
             else:
-                lr = _LowRank(self, h, R, C, cEv, cAv)
+                lr = LowRankUpdate(self, h, R, C, cEv, cAv)
         if lr is None and self.lowrank is True:
             raise ValueError(f"lowrank=True: {why}")
         self.lowrank_info["reason"] = why
@@ -180,7 +180,7 @@ class _Stepper:
                 if self.version != self.coeffs.version:
                     self._build()
                 Ed, Ad = self.coeffs.data_at(ts)
-            except _PatternChanged:
+            except PatternChanged:
                 continue        # pattern grew: rebuild templates and redo this chunk
             ns = ts.size // m
             for i in range(m):
@@ -191,7 +191,7 @@ class _Stepper:
         return X, samples
 
 
-class RadauStepper(_Stepper):
+class RadauStepper(Stepper):
     """3-stage Radau IIA: stage equations ``E(t_j) sum_l w_jl (X_l - x0) / h = A(t_j) X_j``
     (w = RADAU_IIA["A"]^-1), x1 = X_3; unknowns and rows interleaved by stage."""
 
@@ -233,7 +233,7 @@ class RadauStepper(_Stepper):
         return (3 * idx[:, None] + np.arange(3)[None, :]).ravel()
 
 
-class MidpointStepper(_Stepper):
+class MidpointStepper(Stepper):
     """The paper's finite elements in time: central differencing about t + h/2 on the
     differential rows (E row nonzero somewhere), the algebraic rows (zero rows of E)
     collocated at the new node t + h."""
@@ -273,6 +273,6 @@ class MidpointStepper(_Stepper):
 STEPPERS = {"radau": RadauStepper, "paper": MidpointStepper}
 
 
-def make_stepper(coeffs, method: str, lowrank: Optional[bool] = False) -> _Stepper:
+def make_stepper(coeffs, method: str, lowrank: Optional[bool] = False) -> Stepper:
     """The stepper of ``method`` ("radau" or "paper")."""
     return STEPPERS[method](coeffs, lowrank=lowrank)

@@ -29,7 +29,7 @@ NAMED = ("time", "azimuth", "yaw", "yaw_rate", "teeter", "teeter_rate")
 PERTURBABLE = ("yaw", "yaw_rate", "teeter", "teeter_rate")
 
 
-def _check_perturbation(name, value) -> float:
+def check_perturbation(name, value) -> float:
     """One perturbation: ``name`` in PERTURBABLE, ``value`` a finite number."""
     if name not in PERTURBABLE:
         raise ValueError(f"perturb: unknown name {name!r}; allowed: {', '.join(PERTURBABLE)}")
@@ -55,11 +55,11 @@ def parse_perturb(text: str) -> dict:
                              f"with NAME in {', '.join(PERTURBABLE)}")
         if name in out:
             raise ValueError(f"perturb: {name} is given twice in {text!r}; give each name once")
-        out[name] = _check_perturbation(name, value)
+        out[name] = check_perturbation(name, value)
     return out
 
 
-class _BladeIndex:
+class BladeIndex:
     """Precomputed index arrays of one blade (cheap extraction every step)."""
 
     def __init__(self, layout, k):
@@ -71,7 +71,7 @@ class _BladeIndex:
 
 
 # ============================================================================ initial state
-def _blade_rows(model):
+def blade_rows(model):
     """Row/column index sets of the blades: strain-displacement rows (constraints),
     kinematic rows, and the columns of u, theta, M, V, Omega (all blades)."""
     sd, kin = [], []
@@ -94,7 +94,7 @@ def _blade_rows(model):
     return np.concatenate(sd), np.concatenate(kin), cols
 
 
-def _rigid_speed_map(model, q, t):
+def rigid_speed_map(model, q, t):
     """Matrix A with qdot = A u (the kinematic relation is linear in the speeds)."""
     nu = model.nu
     if nu == 0:
@@ -141,7 +141,7 @@ def consistent_state(model, y, ydot, t, theta_rate=None):
     """
     y = np.array(y, float)
     ydot = np.array(ydot, float)
-    sd, kin, cols = _blade_rows(model)
+    sd, kin, cols = blade_rows(model)
     pos_cols = np.concatenate([cols["u"], cols["M"]])
 
     def solve_subset(cc, rows, what):
@@ -183,7 +183,7 @@ def consistent_state(model, y, ydot, t, theta_rate=None):
     return y, ydot
 
 
-def _mode_delta(model, mode, amplitude, blade_signs=None):
+def mode_delta(model, mode, amplitude, blade_signs=None):
     """Real perturbation (n,) of the mode ``mode`` scaled so that the largest blade
     displacement or (blade length x rotation) is ``amplitude`` [m].
 

@@ -9,7 +9,7 @@ import math
 import numpy as np
 
 from ...io.tables import write_table
-from .initial import NAMED, _BladeIndex
+from .initial import NAMED, BladeIndex
 
 __all__ = ['SimulationOutputs']
 
@@ -23,7 +23,7 @@ class SimulationOutputs:
         lay = m.layout
         self._iy = lay["yaw"] if "yaw" in lay else None
         self._it = lay["teeter"] if "teeter" in lay else None
-        self._blades = [_BladeIndex(lay, k) for k in range(m.n_blades)]
+        self._blades = [BladeIndex(lay, k) for k in range(m.n_blades)]
         self._stations = np.array(m.beam.props.nodes, float)
         self._stations.setflags(write=False)
         self._N = m.beam.N

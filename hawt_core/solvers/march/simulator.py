@@ -48,7 +48,8 @@ from ...numerics.checks import check_number
 from ...numerics.jacobian import ColouredJacobian
 from ...numerics.threads import blas_threads
 from ..steady import constant_steady_state
-from .initial import SimulationError, _blade_rows, _check_perturbation, _mode_delta, _rigid_speed_map, consistent_state
+from .initial import (SimulationError, blade_rows, check_perturbation, consistent_state,
+                      mode_delta, rigid_speed_map)
 from .outputs import SimulationOutputs
 from .step_solver import StepSolver
 from .window import WindowFailure, WindowSolver
@@ -66,7 +67,7 @@ class Simulator(StepSolver, SimulationOutputs):
     ``perturb``: dict of named rigid DOF perturbations (``yaw``, ``yaw_rate``, ``teeter``
     [rad], ``teeter_rate`` [rad/s], ``teeter_rate`` being d(teeter)/dt). ``mode``,
     ``mode_amplitude`` [m], ``mode_blade_signs``: a mode-shape perturbation (see
-    :func:`_mode_delta`). ``y0``: an explicit starting state (made consistent unless
+    :func:`mode_delta`). ``y0``: an explicit starting state (made consistent unless
     ``consistent=False``). ``record``: keep time histories for ``history()``/``save()``.
 
     ``method``: how each step's equations are solved (the time discretization is the same):
@@ -115,7 +116,7 @@ class Simulator(StepSolver, SimulationOutputs):
 
         perturb = dict(perturb or {})
         for name, val in perturb.items():
-            _check_perturbation(name, val)
+            check_perturbation(name, val)
             base = "yaw" if name.startswith("yaw") else "teeter"
             if base not in model.layout:
                 raise ValueError(f"perturb: {name!r} is not allowed; this model has no {base} "
@@ -201,9 +202,9 @@ class Simulator(StepSolver, SimulationOutputs):
         y = y.copy()
         yd = yd.copy()
         if mode is not None and amplitude != 0:
-            d = _mode_delta(m, mode, amplitude, signs)
+            d = mode_delta(m, mode, amplitude, signs)
             y[:nr] += d[:nr]
-            _, _, cols = _blade_rows(m)
+            _, _, cols = blade_rows(m)
             y[cols["theta"]] += d[cols["theta"]]
             y[cols["u"]] += d[cols["u"]]          # initial guess; re-solved below
         for name in ("yaw", "teeter"):
@@ -213,7 +214,7 @@ class Simulator(StepSolver, SimulationOutputs):
         # rates: the requested coordinate rates, through the linear map qdot = A u
         rates = {"yaw_rate": "yaw", "teeter_rate": "teeter"}
         if any(r in perturb for r in rates):
-            A = _rigid_speed_map(m, q, t)
+            A = rigid_speed_map(m, q, t)
             qd = A @ y[nq:nr]
             for r, c in rates.items():
                 if r in perturb:
