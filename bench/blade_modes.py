@@ -16,8 +16,8 @@ import numpy as np
 
 from hawt_core.analyses.blade_modes import SPARSE_THRESHOLD
 from hawt_core.assembly import SpinningBlade
-from hawt_core.numerics.pencil import (finite_modes,
-                                   frequency_bound, sparse_modes)
+from hawt_core.fem.energy import frequency_bound
+from hawt_core.numerics.pencil import finite_modes, sparse_modes
 from hawt_core.model import Beam, Hub, Nacelle, Rotor, SectionTable, Turbine
 
 

@@ -148,7 +148,7 @@ def campbell_point(task: dict) -> dict:
 
 
 # ---------------------------------------------------------------------------- tracking
-def _mac_matrix(A: np.ndarray, B: np.ndarray, max_shift: int = 0, step: int = 1) -> np.ndarray:
+def shifted_mac(A: np.ndarray, B: np.ndarray, max_shift: int = 0, step: int = 1) -> np.ndarray:
     """MAC between the modes (last axis) of A (H, m, p) and B (H, m, q) -> (p, q); with
     ``max_shift`` > 0 (A, B Fourier coefficients over harmonics -K..K) the best over
     re-indexings of B's harmonics by -max_shift..max_shift, i.e. invariant to the whole-per-rev
