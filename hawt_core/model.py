@@ -151,14 +151,19 @@ class Nacelle:
 
     ``yaw_inertia`` (Iy) [kg m^2] is the inertia about the yaw axis of everything but the
     blades, hub included (so the nacelle body alone carries Iy - Ihlat);
-    ``yaw_to_teeter`` (d) [m] is the distance from the yaw axis to the teeter axis along the
-    shaft; ``shaft_tilt`` [rad]; ``yaw_free`` False locks the yaw bearing; ``mass`` [kg].
+    ``yaw_to_teeter`` (d) [m] is the distance from the yaw axis to the teeter axis (the rotor
+    apex of a rigid hub) along the shaft, positive downwind (+y3): negative for an upwind
+    rotor (ElastoDyn's OverHang); ``shaft_tilt`` [rad]; ``yaw_free`` False locks the yaw
+    bearing; ``mass`` [kg].
 
     Only with a flexible tower (or gravity on a moving tower top) do these matter:
     ``cg_offset`` (x1, x2, x3) [m] of the nacelle mass centre from the tower-top point TY in
     the nacelle frame Y (y1 up, y2 lateral, y3 along the untilted shaft, downwind);
     ``inertia_pitch`` (about y2, nodding) and ``inertia_roll`` (about y3) [kg m^2] of the
-    nacelle body about its mass centre (its yaw inertia follows from ``yaw_inertia``).
+    nacelle body about its mass centre (its yaw inertia follows from ``yaw_inertia``);
+    ``shaft_height`` [m]: height of the point where the shaft axis meets the yaw axis above
+    the tower-top point TY, along y1 (ElastoDyn's Twr2Shft); ``yaw_bearing_mass`` [kg]: a
+    point mass at TY that does not yaw (ElastoDyn's YawBrMass).
     """
 
     yaw_inertia: float = 16599.0
@@ -171,6 +176,8 @@ class Nacelle:
     cg_offset: tuple = (0.0, 0.0, 0.0)
     inertia_pitch: float = 0.0
     inertia_roll: float = 0.0
+    shaft_height: float = 0.0
+    yaw_bearing_mass: float = 0.0
 
 
 @dataclass(frozen=True)

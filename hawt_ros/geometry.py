@@ -57,7 +57,7 @@ class RotorGeometry:
         rho = self.rigid.root_offset_hub @ H.T             # root points from SH, inertial
         s3, h2, y1 = S[:, 2], H[:, 1], Y[:, 0]
         m_sh = (np.cross(rho, F) + M).sum(axis=0)          # moment about SH
-        r_ty = rho + self.rigid.d * s3                     # root points from TY
+        r_ty = rho + self.rigid.teeter_point(fr)          # root points from TY
         m_ty = (np.cross(r_ty, F) + M).sum(axis=0)         # moment about TY
         return float(m_ty @ y1), float(m_sh @ h2), float(m_sh @ s3)
 
@@ -77,6 +77,6 @@ class RotorGeometry:
         if frame != "nacelle":
             raise ValueError(f"frame: {frame!r} is not allowed; choose nacelle or hub")
         fr = self.frames(named, t) if frames is None else frames
-        Y, S, H = fr["Y"], fr["S"], fr["H"]
-        p_n = np.einsum("ij,ksj->ksi", H, p_h) + self.rigid.d * S[:, 2]   # inertial, from TY
+        Y, H = fr["Y"], fr["H"]
+        p_n = np.einsum("ij,ksj->ksi", H, p_h) + self.rigid.teeter_point(fr)  # from TY
         return np.einsum("ji,ksj->ksi", Y, p_n)            # components in the nacelle basis

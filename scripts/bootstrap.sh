@@ -124,8 +124,12 @@ _hawt_bootstrap_main() {
   fi
 
   # --- install ----------------------------------------------------------------------------
-  say "installing hawt[test,ros] (editable) and the ROS 2 wheels into $venv"
-  pip_q install -q -e "$root[test,ros]"
+  say "installing hawt[test,ros,turbines] (editable) and the ROS 2 wheels into $venv"
+  pip_q install -q -e "$root[test,ros,turbines]"
+  # the OpenFAST decks (NREL 5-MW, IEA 15-MW, ...) and the ROSCO controller library ship in
+  # the rosco wheel; hawt reads its data only, so its heavy dependencies are not installed
+  say "installing the rosco wheel (OpenFAST decks and libdiscon) without its dependencies"
+  pip_q install -q --no-deps "rosco==2.10.6"
   say "installing the build requirements of msg_defs/hawt_msgs"
   local reqs
   reqs="$("$vpy" -c '
@@ -141,7 +145,7 @@ with open(sys.argv[1], "rb") as f:
 
   # --- check --------------------------------------------------------------------------------
   if ! "$vpy" -c '
-import rclpy, rclpy.action, rclpy.serialization, mcap, mcap_ros2
+import rclpy, rclpy.action, rclpy.serialization, mcap, mcap_ros2, openfast_io, Examples
 from hawt_msgs.msg import BladeDeflection, Mode
 from hawt_msgs.srv import ModalAnalysis
 from hawt_msgs.action import ModalAnalysis as ModalAnalysisAction

@@ -454,7 +454,7 @@ def test_nacelle_mass_properties_in_the_turbine_file():
     offset mass with a flexible tower."""
     import yaml
     from hawt_core.io import TurbineFileError, dump_turbine, turbine_from_dict
-    from hawt_core.io.turbine_yaml import turbines_equal
+    from hawt_core.io import turbines_equal
     d = yaml.safe_load(dump_turbine(PAPER))
     assert not {"cg_offset", "inertia_pitch", "inertia_roll"} & set(d["nacelle"])
     d["nacelle"].update(cg_offset=[0.5, 0, -1], inertia_pitch=100.0, inertia_roll=50)

@@ -12,10 +12,12 @@ from __future__ import annotations
 
 import argparse
 import sys
+import warnings
 from importlib.metadata import entry_points
 
 from . import commands as _commands  # noqa: F401  (registers blade-modes, modes, campbell)
 from . import simulate as _simulate  # noqa: F401  (registers simulate)
+from . import turbines as _turbines  # noqa: F401  (registers turbines, import)
 from .parser import COMMANDS, EXIT_USAGE, CliError, Parser
 
 __all__ = ["main", "build_parser", "plugin_commands"]
@@ -52,8 +54,15 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _show_warning(message, category, filename, lineno, file=None, line=None):
+    """Warnings about the input on one line each, as hawt's errors are."""
+    text = " ".join(str(message).split())
+    print(f"hawt: warning: {text}", file=sys.stderr if file is None else file)
+
+
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
+    warnings.showwarning = _show_warning
     plugins = plugin_commands()
     if argv and argv[0] in plugins:        # a plugin (hawt_ros) parses its own arguments
         return int(plugins[argv[0]]["run"](list(argv)) or 0)

@@ -77,7 +77,9 @@ _rotor_speed = finite_float(minimum=0.0, unit="rad/s")
 
 def turbine_arg(p):
     p.add_argument("turbine", nargs="?", default=None, metavar="TURBINE",
-                   help="turbine YAML file (default: the paper's Table 1 turbine)")
+                   help="a hawt turbine file (YAML), an OpenFAST deck (.fst) or the short "
+                        "name of a shipped turbine (hawt turbines); default: the paper's "
+                        "Table 1 turbine")
 
 
 def elements_arg(p):
@@ -94,9 +96,10 @@ def model_args(p):
 
 
 def load(path):
-    """The turbine of ``path`` (None: the paper's Table 1 turbine)."""
-    from ..io import load_turbine
-    return load_turbine(path)
+    """The turbine of ``path``: a file, an OpenFAST deck or a shipped name (None: the paper's
+    Table 1 turbine)."""
+    from ..io.catalog import load_any
+    return load_any(path)
 
 
 # ---------------------------------------------------------------------------- modes

@@ -4,7 +4,7 @@ imported when the command runs, so that ``import hawt_core.cli`` stays cheap).
 
 from __future__ import annotations
 
-from .parser import command, finite_float, positive_int
+from .parser import command, finite_float, load, positive_int, turbine_arg
 from .status import ProgressLine
 
 
@@ -15,7 +15,6 @@ from .status import ProgressLine
 def cmd_simulate(args) -> int:
     import json
     from ..assembly import TurbineModel
-    from ..io import load_turbine
     from ..numerics.checks import check_number
     from ..solvers.march import NAMED, Simulator, parse_perturb
     duration = check_number("duration", args.duration, minimum=0.0)
@@ -23,7 +22,7 @@ def cmd_simulate(args) -> int:
     perturb = parse_perturb(args.perturb)
     if args.output and not args.output.lower().endswith((".csv", ".npz")):
         raise ValueError(f"output: {args.output!r} is not allowed; need a .csv or .npz file")
-    turbine = load_turbine(args.turbine)
+    turbine = load(args.turbine)
     if args.lock_yaw:
         from dataclasses import replace
         turbine = replace(turbine, nacelle=replace(turbine.nacelle, yaw_free=False))
@@ -54,8 +53,7 @@ def cmd_simulate(args) -> int:
 
 @cmd_simulate.arguments
 def _simulate_args(p):
-    p.add_argument("turbine", nargs="?", default=None, metavar="TURBINE",
-                   help="turbine YAML file (default: the paper's Table 1 turbine)")
+    turbine_arg(p)
     p.add_argument("--duration", type=finite_float(), required=True, metavar="S",
                    help="simulated time [s]")
     p.add_argument("--step-deg", type=finite_float(), default=1.0, metavar="DEG",

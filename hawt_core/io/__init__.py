@@ -1,12 +1,11 @@
 """Turbine files: reading, validating and writing the YAML turbine description."""
+from .turbine_writer import dump_turbine, turbines_equal
 from .turbine_yaml import (
     TurbineFileError,
     TurbineFileWarning,
     default_turbine_path,
-    dump_turbine,
     load_turbine,
     turbine_from_dict,
-    turbines_equal,
 )
 
 __all__ = [

@@ -9,8 +9,6 @@ Public API::
 
     load_turbine(path=None) -> Turbine      # None: the shipped default; also takes a dict
     turbine_from_dict(d, source="<dict>")   # the same validation for an already-parsed mapping
-    dump_turbine(turbine) -> str            # YAML text that loads back to an equal Turbine
-    turbines_equal(a, b) -> bool            # exact field-by-field comparison of two Turbines
     default_turbine_path() -> pathlib.Path
 
 Every problem found in a file is reported as a :class:`TurbineFileError` (a ``ValueError``) whose
@@ -26,7 +24,6 @@ import math
 import re
 import warnings
 from collections.abc import Mapping
-from dataclasses import fields, is_dataclass
 from pathlib import Path
 from typing import Any, Optional
 
@@ -37,7 +34,7 @@ from ..model import Beam, Gravity, Hub, Nacelle, Rotor, SectionTable, Turbine
 
 __all__ = [
     "TurbineFileError", "TurbineFileWarning", "load_turbine", "turbine_from_dict",
-    "dump_turbine", "turbines_equal", "default_turbine_path", "I1_TOLERANCE",
+    "default_turbine_path", "I1_TOLERANCE",
 ]
 
 #: Relative tolerance on ``I1 = I2 + I3`` before a TurbineFileWarning is issued.
@@ -131,20 +128,21 @@ _HUB = {"radius": True, "undersling": False, "teeter": True, "inertia_lateral": 
         "mass": False, "counterweight_mass": False, "counterweight_radius": False}
 _NACELLE = {"yaw_inertia": True, "yaw_stiffness": False, "yaw_damping": False,
             "yaw_to_teeter": True, "shaft_tilt": False, "yaw_free": True, "mass": False,
-            "cg_offset": False, "inertia_pitch": False, "inertia_roll": False}
+            "cg_offset": False, "inertia_pitch": False, "inertia_roll": False,
+            "shaft_height": False, "yaw_bearing_mass": False}
 _BEAM = {"length": True, "elements": True, "sections": True}
 _TOWER = dict(_BEAM, rigid=False)
 _GRAVITY = {"enabled": True, "g": False}
 #: Per-station scalar properties: name -> value rule (a key of _RULES).
-_SCALAR_PROPS = {
+SCALAR_PROPS = {
     "mass": "> 0", "i1": "> 0", "i2": "> 0", "i3": "> 0",
     "gj": "> 0", "ei2": "> 0", "ei3": "> 0",
     "ea": "> 0", "ga2": "> 0", "ga3": "> 0", "twist": "twist",
 }
-_MASS_PROPS = ("mass", "i1", "i2", "i3")          # replaced by mass_6x6 ...
-_MASS_DIAGONAL = (0, 3, 4, 5)                     # ... diagonal entries holding them
-_STIFF_PROPS = ("ea", "ga2", "ga3", "gj", "ei2", "ei3")  # replaced by stiffness_6x6 diagonal
-_SECTIONS = dict({"stations": True}, **{k: False for k in _SCALAR_PROPS},
+MASS_PROPS = ("mass", "i1", "i2", "i3")          # replaced by mass_6x6 ...
+MASS_DIAGONAL = (0, 3, 4, 5)                     # ... diagonal entries holding them
+STIFF_PROPS = ("ea", "ga2", "ga3", "gj", "ei2", "ei3")  # replaced by stiffness_6x6 diagonal
+_SECTIONS = dict({"stations": True}, **{k: False for k in SCALAR_PROPS},
                  cg_offset=False, tension_offset=False, stiffness_6x6=False, mass_6x6=False)
 
 _RULES = {
@@ -488,12 +486,12 @@ def _section_table(c: _Checker, value: Any, path: str) -> Optional[SectionTable]
     M = c.matrices(d["mass_6x6"], f"{path}.mass_6x6", ns, False) if has_m else None
 
     props = {}
-    for key, rule in _SCALAR_PROPS.items():
+    for key, rule in SCALAR_PROPS.items():
         if d.get(key) is not None:
             props[key] = c.per_station(d[key], f"{path}.{key}", ns, rule)
-        elif key in _MASS_PROPS and not has_m or key in ("gj", "ei2", "ei3") and not has_k:
+        elif key in MASS_PROPS and not has_m or key in ("gj", "ei2", "ei3") and not has_k:
             c.error(f"{path}.{key}", "required key is missing (or give the full "
-                                     f"{'mass_6x6' if key in _MASS_PROPS else 'stiffness_6x6'})")
+                                     f"{'mass_6x6' if key in MASS_PROPS else 'stiffness_6x6'})")
     for key in ("cg_offset", "tension_offset"):
         if d.get(key) is not None:
             props[key] = c.pairs(d[key], f"{path}.{key}", ns)
@@ -512,7 +510,7 @@ def _section_table(c: _Checker, value: Any, path: str) -> Optional[SectionTable]
         return None
 
     # Fill the scalar properties from the full matrices' diagonals where not given.
-    for mats, keys, diag in ((M, _MASS_PROPS, _MASS_DIAGONAL), (K, _STIFF_PROPS, range(6))):
+    for mats, keys, diag in ((M, MASS_PROPS, MASS_DIAGONAL), (K, STIFF_PROPS, range(6))):
         if mats is None:
             continue
         for key, j in zip(keys, diag):
@@ -599,7 +597,10 @@ def _build(c: _Checker, data: Any, default_name: str) -> Optional[Turbine]:
         hub = dict(radius=c.number(h, "radius", "hub", ">= 0"),
                    undersling=c.number(h, "undersling", "hub", "finite", 0.0),
                    teeter=c.boolean(h, "teeter", "hub"),
-                   inertia_lateral=c.number(h, "inertia_lateral", "hub", "> 0"),
+                   # a rigid hub may be a point mass with inertia about the shaft only
+                   # (ElastoDyn's hub); a teetering one needs its lateral inertia
+                   inertia_lateral=c.number(h, "inertia_lateral", "hub",
+                                            ">= 0" if h.get("teeter") is False else "> 0"),
                    inertia_longitudinal=c.number(h, "inertia_longitudinal", "hub", "> 0"),
                    teeter_stiffness=c.number(h, "teeter_stiffness", "hub", ">= 0", 0.0),
                    teeter_damping=c.number(h, "teeter_damping", "hub", ">= 0", 0.0),
@@ -612,13 +613,16 @@ def _build(c: _Checker, data: Any, default_name: str) -> Optional[Turbine]:
         nacelle = dict(yaw_inertia=c.number(n, "yaw_inertia", "nacelle", "> 0"),
                        yaw_stiffness=c.number(n, "yaw_stiffness", "nacelle", ">= 0", 0.0),
                        yaw_damping=c.number(n, "yaw_damping", "nacelle", ">= 0", 0.0),
-                       yaw_to_teeter=c.number(n, "yaw_to_teeter", "nacelle", ">= 0"),
+                       yaw_to_teeter=c.number(n, "yaw_to_teeter", "nacelle", "finite"),
                        shaft_tilt=c.number(n, "shaft_tilt", "nacelle", "angle", 0.0),
                        yaw_free=c.boolean(n, "yaw_free", "nacelle"),
                        mass=c.number(n, "mass", "nacelle", ">= 0", 0.0),
                        cg_offset=_vector3(c, n, "cg_offset", "nacelle"),
                        inertia_pitch=c.number(n, "inertia_pitch", "nacelle", ">= 0", 0.0),
-                       inertia_roll=c.number(n, "inertia_roll", "nacelle", ">= 0", 0.0))
+                       inertia_roll=c.number(n, "inertia_roll", "nacelle", ">= 0", 0.0),
+                       shaft_height=c.number(n, "shaft_height", "nacelle", "finite", 0.0),
+                       yaw_bearing_mass=c.number(n, "yaw_bearing_mass", "nacelle", ">= 0",
+                                                 0.0))
     blade = _beam(c, data["blade"], "blade", _BEAM) if "blade" in data else None
     tower = _tower(c, data.get("tower"))
     gravity = Gravity()
@@ -678,105 +682,3 @@ def load_turbine(path=None) -> Turbine:
     if data is None:
         raise TurbineFileError(str(p), ["the file is empty"])
     return turbine_from_dict(data, str(p), _default_name=p.stem, _stacklevel=3)
-
-
-# --------------------------------------------------------------------------------------------
-# Writing.
-
-class _Dumper(yaml.SafeDumper):
-    """Lists of numbers in flow style ``[0.0, 1.0]``, everything else in block style."""
-
-    def represent_list(self, data):
-        flow = all(not isinstance(x, (list, tuple, dict)) for x in data)
-        return self.represent_sequence("tag:yaml.org,2002:seq", data, flow_style=flow)
-
-
-_Dumper.add_representer(list, _Dumper.represent_list)
-
-
-def _compact(a: np.ndarray):
-    """A uniform array as one value (scalar or matrix), otherwise the list per station."""
-    a = np.asarray(a, dtype=float)
-    if len(a) > 0 and np.all(a == a[0]) and not np.any(np.isnan(a)):
-        return a[0].tolist()
-    return a.tolist()
-
-
-def _table_dict(t: SectionTable) -> dict:
-    out = {"stations": t.stations.tolist()}
-    derived = {}
-    if t.mass_6x6 is not None:
-        derived.update({k: t.mass_6x6[:, j, j] for k, j in zip(_MASS_PROPS, _MASS_DIAGONAL)})
-    if t.stiffness_6x6 is not None:
-        for k, j in zip(_STIFF_PROPS, range(6)):
-            diag = t.stiffness_6x6[:, j, j]
-            derived[k] = diag if np.all(np.isfinite(diag)) else None
-    for key in _SCALAR_PROPS:
-        value = getattr(t, key)
-        if key in derived:
-            same = (value is None and derived[key] is None) or (
-                value is not None and derived[key] is not None
-                and np.array_equal(value, derived[key]))
-            if same:
-                continue
-        if value is not None:
-            out[key] = _compact(value)
-    for key in ("cg_offset", "tension_offset", "stiffness_6x6", "mass_6x6"):
-        value = getattr(t, key)
-        if value is not None:
-            out[key] = _compact(value)
-    return out
-
-
-def _beam_dict(b: Beam) -> dict:
-    return {"length": float(b.length), "elements": int(b.elements),
-            "sections": _table_dict(b.sections)}
-
-
-def dump_turbine(turbine: Turbine) -> str:
-    """YAML text of ``turbine`` that :func:`load_turbine` reads back to an equal Turbine.
-
-    Floats are written with the shortest repr that round-trips exactly; uniform per-station
-    properties are written as one number.
-    """
-    r, h, n, g = turbine.rotor, turbine.hub, turbine.nacelle, turbine.gravity
-    data = {
-        "name": str(turbine.name),
-        "rotor": {"speed": float(r.speed), "blades": int(r.blades), "precone": float(r.precone)},
-        "hub": {"radius": float(h.radius), "undersling": float(h.undersling),
-                "teeter": bool(h.teeter), "inertia_lateral": float(h.inertia_lateral),
-                "inertia_longitudinal": float(h.inertia_longitudinal),
-                "teeter_stiffness": float(h.teeter_stiffness),
-                "teeter_damping": float(h.teeter_damping), "mass": float(h.mass),
-                **({"counterweight_mass": float(h.counterweight_mass),
-                    "counterweight_radius": float(h.counterweight_radius)}
-                   if h.counterweight_mass or h.counterweight_radius else {})},
-        "nacelle": {"yaw_inertia": float(n.yaw_inertia), "yaw_stiffness": float(n.yaw_stiffness),
-                    "yaw_damping": float(n.yaw_damping),
-                    "yaw_to_teeter": float(n.yaw_to_teeter), "shaft_tilt": float(n.shaft_tilt),
-                    "yaw_free": bool(n.yaw_free), "mass": float(n.mass),
-                    **({"cg_offset": [float(x) for x in n.cg_offset]}
-                       if any(float(x) != 0.0 for x in n.cg_offset) else {}),
-                    **({"inertia_pitch": float(n.inertia_pitch)} if n.inertia_pitch else {}),
-                    **({"inertia_roll": float(n.inertia_roll)} if n.inertia_roll else {})},
-        "blade": _beam_dict(turbine.blade),
-        "tower": {"rigid": True} if turbine.tower is None else _beam_dict(turbine.tower),
-        "gravity": {"enabled": bool(g.enabled), "g": float(g.g)},
-    }
-    header = ("# hawt turbine file, written by hawt_core.io.dump_turbine.\n"
-              "# SI units (m, kg, s, N), angles in rad, rotor speed in rad/s; "
-              "see docs/turbine-format.md.\n")
-    return header + yaml.dump(data, Dumper=_Dumper, sort_keys=False, width=100)
-
-
-def turbines_equal(a: Any, b: Any) -> bool:
-    """True if two Turbines (or model dataclasses) hold exactly the same values."""
-    if is_dataclass(a) and not isinstance(a, type):
-        if type(a) is not type(b):
-            return False
-        return all(turbines_equal(getattr(a, f.name), getattr(b, f.name)) for f in fields(a))
-    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
-        if a is None or b is None:
-            return False
-        return np.shape(a) == np.shape(b) and bool(np.array_equal(a, b))
-    return a == b

@@ -151,8 +151,8 @@ class _ModeGeometry:
             fr = rg.frames(np.asarray(q, float), t)
             top = np.zeros(3)
         S0 = rg.frames(np.zeros(rg.n_q), t)["S"]
-        H, B, S = fr["H"], fr["B"], fr["S"]
-        hub = top + rg.d * S[:, 2]
+        H, B = fr["H"], fr["B"]
+        hub = top + rg.teeter_point(fr)
         pts = np.empty((self.nb, len(self.nodes), 3))
         for k in range(self.nb):
             root = hub + H @ rg.root_offset_hub[k]

@@ -30,9 +30,11 @@ Frames (every basis right-handed; "x turned by a about z" is a right-handed rota
   ``h3``, then by ``-precone`` about its own ``b2`` so that a positive precone tilts ``b1``
   towards ``+h3`` (``b1 = cos(beta) a1 + sin(beta) h3`` with ``a1`` the unconed direction).
   Two blades: blade 1 ("D") has ``d1 = -h1, d2 = -h2, d3 = h3`` (no precone).
-* blade k root point: ``P_k = TY + d s3 + e (cos phi_k h1 + sin phi_k h2) - lhd1 h3``
-  (d = ``nacelle.yaw_to_teeter`` along the (tilted) shaft, e = ``hub.radius``,
-  lhd1 = ``hub.undersling``).  The teeter-axis point is ``SH = TY + d s3``.
+* blade k root point: ``P_k = TY + h y1 + d s3 + e (cos phi_k h1 + sin phi_k h2) - lhd1 h3``
+  (h = ``nacelle.shaft_height`` along the yaw axis, d = ``nacelle.yaw_to_teeter`` along the
+  (tilted) shaft, negative upwind, e = ``hub.radius``, lhd1 = ``hub.undersling``).  The
+  teeter-axis point is ``SH = TY + h y1 + d s3``; with a rigid tower ``h`` changes nothing
+  (TY is fixed and the yaw axis passes through it).
 
 Generalized coordinates and speeds (paper's Eq. 7)
 --------------------------------------------------
@@ -50,7 +52,7 @@ Bodies
 * hub H: principal inertia ``Ihlat`` about h1, h2 and ``Ihlong`` about h3, mass ``m_hub`` at SH.
 * shaft S massless; the tower rigid and fixed, or a flexible beam (then the nacelle's mass at
   ``TY + Y cg_offset`` and its inertia ``diag(Iy_n - m |offset_perp|^2, I_pitch, I_roll)``
-  about its mass centre matter).
+  about its mass centre matter, and the yaw bearing's point mass at TY).
 
 Loads
 -----
@@ -102,6 +104,10 @@ class RigidSystem:
         self.e = float(hub.radius)
         self.lhd1 = float(hub.undersling)
         self.d = float(nac.yaw_to_teeter)
+        #: height of the shaft/yaw-axis intersection above the tower-top point [m]
+        self.shaft_height = float(getattr(nac, "shaft_height", 0.0))
+        #: point mass at the tower-top point that does not yaw [kg]
+        self.yaw_bearing_mass = float(getattr(nac, "yaw_bearing_mass", 0.0))
         self.tilt = float(nac.shaft_tilt)
         self.yaw_free = bool(nac.yaw_free)
         self.teeter = bool(hub.teeter)
@@ -210,6 +216,11 @@ class RigidSystem:
             out["T"] = Tt
         return out
 
+    def teeter_point(self, frames) -> np.ndarray:
+        """Position [m] of the teeter-axis point SH (rotor apex) relative to the tower-top
+        point TY, inertial components: ``h y1 + d s3`` (``frames`` from :meth:`frames`)."""
+        return self.shaft_height * frames["Y"][..., :, 0] + self.d * frames["S"][..., :, 2]
+
     def _kin(self, q, u, t):
         """Velocities, partial velocities and their ingredients, all in N (the last result is
         cached: one residual evaluation asks for it twice, root motion and dynamics; callers
@@ -288,7 +299,7 @@ class RigidSystem:
         else:
             wr1, wr2 = y1, z
         w_H = w_T + wr1 * U1 + wr2 * U2 + self.omega0 * s3
-        r_SH = self.d * s3
+        r_SH = self.shaft_height * y1 + self.d * s3
         r_c = Y @ self.nacelle_cg
         v_SH = v_T + _cross(w_Y, r_SH)
         rho = self.root_offset_hub @ H.T                       # (Nb, 3) in N
@@ -299,7 +310,8 @@ class RigidSystem:
         vr_SH = np.array([_cross(y1, r_SH), z] + b + [_cross(bj, r_SH) for bj in b])
         vr_c = np.array([_cross(y1, r_c), z] + b + [_cross(bj, r_c) for bj in b])
         vr_P = vr_SH[:, None, :] + _cross(wr_H[:, None, :], rho[None, :, :])   # (8, Nb, 3)
-        return dict(qy=qy, qh=qh, U1=U1, U2=U2, fr=fr, tw=tw, Tt=Tt, y1=y1, s3=s3, h2=h2,
+        vr_T = np.array([z, z] + b + [z, z, z])                # the tower-top point TY
+        return dict(vr_T=vr_T, qy=qy, qh=qh, U1=U1, U2=U2, fr=fr, tw=tw, Tt=Tt, y1=y1, s3=s3, h2=h2,
                     y1h2=y1h2, w_T=w_T, v_T=v_T, w_Y=w_Y, w_H=w_H, wr1=wr1, wr2=wr2,
                     r_SH=r_SH, r_c=r_c, v_SH=v_SH, v_P=v_P, rho=rho, wr_Y=wr_Y, wr_H=wr_H,
                     vr_SH=vr_SH, vr_c=vr_c, vr_P=vr_P)
@@ -337,7 +349,8 @@ class RigidSystem:
         T_H = -(I_H @ alpha_H + _cross(w_H, I_H @ w_H))
         T_Y = -(I_Y @ alpha_Y + _cross(w_Y, I_Y @ w_Y))
         Fstar = (k["wr_H"] @ T_H + k["vr_SH"] @ (-self.hub_mass * a_SH)
-                 + k["wr_Y"] @ T_Y + k["vr_c"] @ (-self.nacelle_mass * a_c))
+                 + k["wr_Y"] @ T_Y + k["vr_c"] @ (-self.nacelle_mass * a_c)
+                 + k["vr_T"] @ (-self.yaw_bearing_mass * a_T))
         if self.counterweight_mass:
             # the counterweight at SH + rho_c (hub-fixed), with its weight
             rho_c = H @ self.counterweight_offset
@@ -351,6 +364,7 @@ class RigidSystem:
         gN = np.array([-self.g, 0.0, 0.0])
         F = np.einsum("rki,ki->r", k["vr_P"], F_N) + k["wr_H"] @ M_N.sum(axis=0)
         F = F + k["vr_SH"] @ (self.hub_mass * gN) + k["vr_c"] @ (self.nacelle_mass * gN)
+        F = F + k["vr_T"] @ (self.yaw_bearing_mass * gN)
         # yaw spring/damper between Y and the tower top: works only through U1
         yaw_t = -self.k_yaw * qy - self.c_yaw * U1
         F = F + np.concatenate([[yaw_t], [0.0 * U1], np.zeros(6)])
@@ -530,6 +544,7 @@ class RigidSystem:
             v_cw = k["v_SH"] + _cross(wH, H @ self.counterweight_offset)
             return (0.5 * (wH @ (I_H @ wH)) + 0.5 * self.hub_mass * (k["v_SH"] @ k["v_SH"])
                     + 0.5 * (wY @ (I_Y @ wY)) + 0.5 * self.nacelle_mass * (v_c @ v_c)
+                    + 0.5 * self.yaw_bearing_mass * (k["v_T"] @ k["v_T"])
                     + 0.5 * self.counterweight_mass * (v_cw @ v_cw))
         self._check_tower(tower)
         k = self._kin(q, u, t)

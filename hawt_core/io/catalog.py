@@ -1,0 +1,91 @@
+"""Where a turbine comes from: a shipped short name, a hawt file or an OpenFAST deck.
+
+``load_any(spec)`` is what every command and the ROS node take as TURBINE:
+
+- ``None``: the paper's Table 1 turbine (the default);
+- a short name of a turbine shipped with hawt (``SHIPPED``: ``paper``, ``nrel5mw``,
+  ``iea15mw``, ...; :func:`shipped_turbines` lists them with what they are);
+- a path ending in ``.fst``: an OpenFAST deck, imported by :mod:`hawt_core.io.openfast`
+  (needs the optional ``openfast-io``); its warnings are issued as TurbineFileWarning;
+- any other path: a hawt turbine file (YAML, docs/turbine-format.md).
+
+The shipped NREL 5-MW and IEA 15-MW files were converted by hawt's importer from the decks
+the ``rosco`` wheel installs; their header comment names the source and importer version.
+"""
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+from ..model import Turbine
+from .turbine_yaml import TurbineFileError, TurbineFileWarning, default_turbine_path, load_turbine
+
+__all__ = ["SHIPPED", "shipped_path", "shipped_turbines", "load_any", "describe"]
+
+_DATA = Path(__file__).resolve().parent.parent / "data"
+
+#: short name -> file in hawt_core/data
+SHIPPED = {
+    "paper": "paper_turbine.yaml",
+    "three-blade": "three_blade_rotor.yaml",
+    "nrel5mw": "nrel5mw.yaml",
+    "iea15mw": "iea15mw.yaml",
+}
+
+
+def shipped_path(name: str) -> Path:
+    """The file of a shipped turbine; KeyError-free: unknown names raise TurbineFileError."""
+    if name not in SHIPPED:
+        raise TurbineFileError(name, [f"not a file and not a shipped turbine; shipped: "
+                                      f"{', '.join(SHIPPED)} (hawt turbines lists them)"])
+    return _DATA / SHIPPED[name] if name != "paper" else default_turbine_path()
+
+
+def describe(path: Path) -> str:
+    """The first header line of a turbine file that says what it is (``# turbine: ...``)."""
+    try:
+        with open(path, encoding="utf-8") as f:
+            for line in f:
+                if not line.startswith("#"):
+                    break
+                if line.lower().startswith("# turbine:"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return ""
+
+
+def shipped_turbines() -> list:
+    """One dict per shipped turbine: name, file, description, blades, rotor radius [m],
+    tower (flexible or rigid), rotor speed [rad/s], elements per blade."""
+    out = []
+    for name in SHIPPED:
+        p = shipped_path(name)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", TurbineFileWarning)
+            t = load_turbine(p)
+        out.append({"name": name, "file": str(p), "description": describe(p),
+                    "blades": t.rotor.blades,
+                    "rotor_radius_m": t.hub.radius + t.blade.length * 1.0,
+                    "tower": "rigid" if t.tower is None else f"flexible, {t.tower.length:g} m",
+                    "rotor_speed": t.rotor.speed, "elements": t.blade.elements})
+    return out
+
+
+def load_any(spec=None) -> Turbine:
+    """The turbine named by ``spec`` (see the module docstring)."""
+    if spec is None:
+        return load_turbine(None)
+    text = str(spec)
+    p = Path(text)
+    if not p.exists() and text in SHIPPED:
+        return load_turbine(shipped_path(text))
+    if p.suffix.lower() == ".fst":
+        from .openfast import read_openfast
+        result = read_openfast(p)
+        for w in result.warnings:
+            warnings.warn(w, TurbineFileWarning, stacklevel=2)
+        return result.turbine
+    if not p.exists() and "/" not in text and not p.suffix:
+        shipped_path(text)                 # raises with the list of shipped names
+    return load_turbine(p)

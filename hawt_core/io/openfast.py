@@ -1,0 +1,537 @@
+"""OpenFAST decks -> hawt turbines, read with the field's own reader (``openfast-io``).
+
+What is read (all files relative to the ``.fst``):
+
+- ElastoDyn main file: rotor (blade count, precone, rotor speed), hub (radius, mass, inertia),
+  nacelle (overhang, shaft tilt, tower-top-to-shaft height, mass, mass centre, yaw inertia,
+  yaw bearing mass), degrees of freedom, tower height;
+- ElastoDyn blade file: mass density, flap and edge stiffness, structural twist (with the
+  adjustment factors AdjBlMs, AdjFlSt, AdjEdSt applied, as ElastoDyn does);
+- ElastoDyn tower file: mass density, fore-aft and side-side stiffness (AdjTwMa, AdjFASt,
+  AdjSSSt applied);
+- BeamDyn blade file (when the deck names one): the full 6x6 stiffness and mass matrices.
+  With ``CompElast = 2`` (BeamDyn blades) they are the blade; with ``CompElast = 1`` the
+  ElastoDyn blade is the blade and the BeamDyn file of the same deck supplies what an
+  ElastoDyn blade lacks (torsion, axial and shear rigidity, section rotary inertia);
+- ServoDyn: the yaw spring and damper (YawSpr, YawDamp) that hold the yaw DOF.
+
+Frames and signs (hawt_core.model): hawt's nacelle frame is (y1 up, y2 lateral, y3 downwind),
+ElastoDyn's (xn downwind, yn lateral to the left looking downwind, zn up), so a point
+(xn, yn, zn) is (zn, -yn, xn) in hawt.  ``OverHang`` (negative upwind) is hawt's
+``yaw_to_teeter``; ``ShftTilt`` and ``PreCone`` keep their sign (negative tilt raises an
+upwind rotor, negative precone cones it upwind).  BeamDyn's section frame (x flapwise towards
+the tower, y towards the trailing edge, z along the span; the IEC blade frame) is
+(b3, -b2, b1) in hawt's blade frame (b1 span, b2 towards the leading edge = the direction of
+motion, b3 flapwise downwind).  ElastoDyn's StrcTwst and BeamDyn's initial twist are positive
+towards feather (leading edge upwind), i.e. from b2 towards -b3: hawt's twist is minus them.
+
+What hawt cannot honour is refused with the file and the key (modal stiffness tuners other
+than 1, a blade mode switched off, a platform DOF, blade pitch DOF, three different blades);
+what is read but not modelled is reported in :attr:`ImportResult.warnings` (mode-shape
+polynomials, structural damping, the drivetrain, substructures, ...), never dropped silently.
+"""
+from __future__ import annotations
+
+import math
+import os
+from importlib import metadata
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..model import Beam, Gravity, Hub, Nacelle, Rotor, SectionTable, Turbine
+from .turbine_yaml import TurbineFileError
+
+__all__ = ["ImportResult", "read_openfast", "IMPORTER", "ELEMENTS", "TOWER_STEEL",
+           "BEAMDYN_TO_HAWT"]
+
+def _version(dist: str) -> str:
+    try:
+        return metadata.version(dist)
+    except metadata.PackageNotFoundError:
+        return "unknown"
+
+
+#: Importer name and version written into the header of converted files.
+IMPORTER = f"hawt {_version('hawt')} OpenFAST importer (openfast-io {_version('openfast-io')})"
+
+#: Finite elements of the imported blade and tower (hawt files must name them).
+ELEMENTS = {"blade": 24, "tower": 12}
+
+#: Steel-tube assumptions for what an ElastoDyn tower file lacks (torsional rigidity and
+#: section rotary inertia): G/E of steel and E / rho [m^2/s^2] with ElastoDyn's effective
+#: tower density (NREL 5-MW: 8500 kg/m^3, E = 210 GPa).  For a thin tube GJ = 2 G I and the
+#: rotary inertia per length about a diameter is rho I = rho EI / E.
+TOWER_STEEL = {"G_over_E": 80.8 / 210.0, "E_over_rho": 210e9 / 8500.0}
+
+#: BeamDyn section components (x, y, z) -> hawt blade frame (b1, b2, b3): rows are hawt axes.
+BEAMDYN_TO_HAWT = np.array([[0.0, 0.0, 1.0], [0.0, -1.0, 0.0], [1.0, 0.0, 0.0]])
+
+
+@dataclass
+class ImportResult:
+    """A turbine read from a deck, with what the reader had to say about it.
+
+    ``warnings``: data read but not modelled, or estimated (each names the file and key);
+    ``notes``: what was taken from where; ``sources``: the files read, by role.
+    """
+
+    turbine: Turbine
+    warnings: list = field(default_factory=list)
+    notes: list = field(default_factory=list)
+    sources: dict = field(default_factory=dict)
+
+    def header(self) -> str:
+        """Provenance lines for a converted file's header comment."""
+        fst = Path(self.sources.get("fst", "?"))
+        shown = str(fst)
+        if "site-packages" in fst.parts:           # a deck from an installed wheel (rosco)
+            rel = fst.parts[fst.parts.index("site-packages") + 1:]
+            shown = f"<site-packages>/{'/'.join(rel)}"
+            if rel and rel[0] == "Examples":
+                shown += f" (installed by rosco {_version('rosco')})"
+        lines = [f"Converted by {IMPORTER} from {shown}"]
+        lines += [f"  {role}: {os.path.relpath(path, fst.parent)}"
+                  for role, path in self.sources.items() if role != "fst"]
+        lines += [f"note: {n}" for n in self.notes]
+        lines += [f"warning: {w}" for w in self.warnings]
+        return "\n".join(lines)
+
+
+def _need_reader():
+    try:
+        from openfast_io.FAST_reader import InputReader_OpenFAST
+    except ImportError:
+        raise TurbineFileError("openfast", [
+            "reading OpenFAST decks needs the optional package openfast-io: "
+            "pip install 'hawt[turbines]' (or pip install openfast-io)"]) from None
+    return InputReader_OpenFAST
+
+
+def _keyed_lines(path: Path) -> dict:
+    """``{key: (line number, value text)}`` of an OpenFAST ``value  key  - description`` file,
+    to name the key and line of a value the positional reader cannot use."""
+    out = {}
+    try:
+        lines = path.read_text(errors="replace").splitlines()
+    except OSError:
+        return out
+    for i, line in enumerate(lines, 1):
+        tok = line.split()
+        if len(tok) >= 2 and not tok[0].startswith("-"):
+            out.setdefault(tok[1], (i, tok[0]))
+    return out
+
+
+class _Deck:
+    """One deck being read: the reader, its files, and the problems found so far."""
+
+    def __init__(self, fst: Path):
+        self.fst = fst
+        self.reader = _need_reader()()
+        self.reader.FAST_InputFile = fst.name
+        self.reader.FAST_directory = str(fst.parent)
+        self.vt = self.reader.fst_vt
+        self.warnings: list = []
+        self.notes: list = []
+        self.sources: dict = {"fst": str(fst)}
+        self.keys: dict = {}
+
+    def path(self, base: Path, name: str, role: str) -> Path:
+        name = str(name).strip().strip('"').strip("'")
+        p = Path(name) if os.path.isabs(name) else base / name
+        p = Path(os.path.normpath(p))
+        if not p.is_file():
+            raise TurbineFileError(str(base if role == "ElastoDyn" else self.sources.get(
+                "ElastoDyn", self.fst)), [f"{role} file {name!r} not found (looked for {p})"])
+        return p
+
+    def read(self, what: str, path: Path, call):
+        """Run one openfast-io reader; any failure -> TurbineFileError naming the file (and
+        the first key whose value is not a number, when that is why)."""
+        self.sources[what] = str(path)
+        try:
+            call()
+        except Exception as exc:                      # openfast-io raises whatever it meets
+            self.keys[what] = _keyed_lines(path)
+            raise TurbineFileError(str(path), [
+                f"cannot be read as an OpenFAST {what} file by openfast-io "
+                f"({type(exc).__name__}: {exc}); check it against the {what} input format"])
+        self.keys[what] = _keyed_lines(path)
+
+    def number(self, module: str, key: str, *, rule: str = "finite", allowed: str = "",
+               vt: dict | None = None) -> float:
+        src = self.vt[module] if vt is None else vt
+        value = src.get(key)
+        file = self.sources.get(module, str(self.fst))
+        line = self.keys.get(module, {}).get(key, (None, None))[0]
+        at = f" (line {line})" if line else ""
+        if value is None:
+            raise TurbineFileError(file, [f"{key}: required key is missing"])
+        try:
+            x = float(value)
+        except (TypeError, ValueError):
+            raise TurbineFileError(file, [f"{key}{at} = {value!r}: must be a number"
+                                          + (f" ({allowed})" if allowed else "")]) from None
+        ok = {"finite": math.isfinite(x), "> 0": x > 0, ">= 0": x >= 0,
+              "== 1": x == 1.0}[rule] and math.isfinite(x)
+        if not ok:
+            raise TurbineFileError(file, [f"{key}{at} = {value!r}: "
+                                          + (allowed or f"must be {rule}")])
+        return x
+
+    def flag(self, module: str, key: str) -> bool:
+        value = self.vt[module].get(key)
+        if not isinstance(value, bool):
+            raise TurbineFileError(self.sources.get(module, str(self.fst)),
+                                   [f"{key} = {value!r}: must be True or False"])
+        return value
+
+
+def _table(deck: _Deck, module: str, keys: tuple, vt: dict) -> dict:
+    """Distributed properties as float arrays, checked finite, stations increasing 0..1."""
+    file = deck.sources[module]
+    out = {}
+    for k in keys:
+        try:
+            out[k] = np.array(vt[k], dtype=float)
+        except (KeyError, TypeError, ValueError):
+            raise TurbineFileError(file, [f"{k}: the distributed-property column is missing "
+                                          "or not numeric"]) from None
+        if not np.all(np.isfinite(out[k])):
+            raise TurbineFileError(file, [f"{k}: every value must be a finite number"])
+    st = out[keys[0]]
+    if len(st) < 2 or st[0] != 0.0 or st[-1] != 1.0 or np.any(np.diff(st) <= 0):
+        raise TurbineFileError(file, [f"{keys[0]} = {st.tolist()}: must increase strictly "
+                                      "from 0 to 1 (at least two stations)"])
+    for k in keys[1:]:
+        if k not in ("StrcTwst",) and np.any(out[k] <= 0):
+            raise TurbineFileError(file, [f"{k}: every value must be > 0"])
+    return out
+
+
+def _main(deck: _Deck):
+    r = deck.reader
+    deck.read("OpenFAST main", deck.fst, r.read_MainInput)
+    fst = deck.vt["Fst"]
+    deck.sources.pop("OpenFAST main")             # it is sources["fst"]
+    deck.vt["OpenFAST main"] = fst
+    comp = {k: fst.get(k) for k in ("CompElast", "CompAero", "CompServo", "CompHydro",
+                                    "CompSub", "CompMooring", "CompIce", "CompInflow")}
+    if comp["CompElast"] not in (1, 2):
+        raise TurbineFileError(str(deck.fst), [
+            f"CompElast = {comp['CompElast']!r}: hawt reads ElastoDyn (1) or ElastoDyn + "
+            "BeamDyn blades (2); SimplifiedElastoDyn (3) has no flexible structure"])
+    for k in ("CompHydro", "CompSub", "CompMooring", "CompIce"):
+        if comp[k]:
+            deck.warnings.append(f"{deck.fst.name}: {k} = {comp[k]} read but not modelled: "
+                                 "hawt clamps the tower at its base (no substructure, "
+                                 "hydrodynamics, mooring or ice)")
+    if comp["CompAero"]:
+        deck.warnings.append(f"{deck.fst.name}: CompAero = {comp['CompAero']}: the aerodynamic "
+                             "model is not imported (hawt's turbine is in a vacuum)")
+    return comp
+
+
+def _check_dofs(deck: _Deck, ed_file: str, nb: int):
+    ed = deck.vt["ElastoDyn"]
+    blade = [k for k in ("FlapDOF1", "FlapDOF2", "EdgeDOF") if not deck.flag("ElastoDyn", k)]
+    if blade:
+        raise TurbineFileError(ed_file, [
+            f"{blade[0]} = False: hawt's blades are beams whose every mode is free; allowed: "
+            "True (all of FlapDOF1, FlapDOF2, EdgeDOF)"])
+    if deck.flag("ElastoDyn", "PitchDOF"):
+        raise TurbineFileError(ed_file, ["PitchDOF = True: hawt's blades have no pitch "
+                                         "bearing DOF; allowed: False"])
+    platform = [k for k in (f"Ptfm{a}DOF" for a in ("Sg", "Sw", "Hv", "R", "P", "Y"))
+                if deck.flag("ElastoDyn", k)]
+    if platform:
+        deck.warnings.append(f"{Path(ed_file).name}: {', '.join(platform)} = True read but not "
+                             "modelled: hawt clamps the tower at its base (TowerBsHt)")
+    tower = [deck.flag("ElastoDyn", k) for k in ("TwFADOF1", "TwFADOF2", "TwSSDOF1",
+                                                  "TwSSDOF2")]
+    if any(tower) and not all(tower):
+        raise TurbineFileError(ed_file, [
+            "TwFADOF1, TwFADOF2, TwSSDOF1, TwSSDOF2 = %s: hawt's tower is a beam with all "
+            "its modes, or rigid; allowed: all True or all False" % tower])
+    drive = [k for k in ("DrTrDOF", "GenDOF") if deck.flag("ElastoDyn", k)]
+    if drive:
+        deck.warnings.append(
+            f"{Path(ed_file).name}: {', '.join(drive)} = True and GenIner, GBRatio, "
+            "DTTorSpr, DTTorDmp read but not modelled yet: the rotor turns at the prescribed "
+            f"RotSpeed = {ed.get('RotSpeed')} rpm")
+    teeter = nb == 2 and deck.flag("ElastoDyn", "TeetDOF")
+    return all(tower), teeter
+
+
+def _blade_beamdyn(deck: _Deck, comp: dict, nb: int):
+    """BeamDyn blade (6x6 per station, hawt frame b, untwisted) or None when there is none."""
+    fst = deck.vt["Fst"]
+    names = [fst.get(f"BDBldFile({k})") for k in (1, 2, 3)[:max(nb, 1)]]
+    name = names[0]
+    if not name or str(name).strip('"').lower() in ("unused", "none", ""):
+        if comp["CompElast"] == 2:
+            raise TurbineFileError(str(deck.fst), ["BDBldFile(1): CompElast = 2 needs a "
+                                                   "BeamDyn blade file"])
+        return None
+    if len(set(names)) > 1:
+        raise TurbineFileError(str(deck.fst), [
+            f"BDBldFile(1..{nb}) = {names}: hawt's blades are identical; allowed: one "
+            "BeamDyn file for every blade"])
+    try:
+        bd_main = deck.path(deck.fst.parent, name, "BeamDyn")
+    except TurbineFileError:
+        if comp["CompElast"] == 2:
+            raise
+        return None
+    deck.read("BeamDyn", bd_main, lambda: deck.reader.read_BeamDyn(str(bd_main), 0))
+    bd = deck.vt["BeamDyn"][0]
+    blade = deck.vt["BeamDynBlade"][0]
+    deck.sources["BeamDyn blade"] = os.path.normpath(bd_main.parent / bd["BldFile"])
+    kp = np.concatenate([np.column_stack([m["kp_xr"], m["kp_yr"], m["kp_zr"],
+                                          m["initial_twist"]]) for m in bd["members"]])
+    length = float(kp[-1, 2] - kp[0, 2])
+    if not length > 0:
+        raise TurbineFileError(str(bd_main), [f"kp_zr: the key points must run outward "
+                                              f"along z (got {kp[0, 2]} .. {kp[-1, 2]} m)"])
+    stations = np.asarray(blade["radial_stations"], float)
+    T = np.zeros((6, 6))
+    T[:3, :3] = T[3:, 3:] = BEAMDYN_TO_HAWT
+    K = T @ np.asarray(blade["beam_stiff"], float) @ T.T
+    M = T @ np.asarray(blade["beam_inertia"], float) @ T.T
+    # section twist at the stations from the key points (towards feather -> minus hawt's)
+    twist = -np.radians(np.interp(stations * length + kp[0, 2], kp[:, 2], kp[:, 3]))
+    damp = blade.get("damp_type")
+    if damp:
+        deck.warnings.append(f"{Path(deck.sources['BeamDyn blade']).name}: damp_type = "
+                             f"{damp} (structural damping) read but not modelled")
+    return dict(stations=stations, K=K, M=M, twist=twist, length=length, file=bd_main,
+                curve=float(np.abs(kp[:, :2]).max()))
+
+
+def _rotate6(R: np.ndarray, A: np.ndarray) -> np.ndarray:
+    """R6 A R6^T per station with R6 = diag(R, R): R (ns, 3, 3), A (ns, 6, 6)."""
+    R6 = np.zeros(A.shape)
+    R6[:, :3, :3] = R6[:, 3:, 3:] = R
+    return R6 @ A @ np.swapaxes(R6, -1, -2)
+
+
+def _interp(x, xp, fp):
+    fp = np.asarray(fp)
+    flat = fp.reshape(len(xp), -1)
+    return np.stack([np.interp(x, xp, flat[:, j]) for j in range(flat.shape[1])],
+                    -1).reshape((len(x),) + fp.shape[1:])
+
+
+def _blade(deck: _Deck, comp: dict, ed_file: Path, nb: int, length: float) -> Beam:
+    from ..numerics.rotations import rot1
+
+    bd = _blade_beamdyn(deck, comp, nb)
+    if comp["CompElast"] == 2:
+        if abs(bd["length"] - length) > 1e-3 * length:
+            deck.warnings.append(f"{bd['file'].name}: blade length {bd['length']:.4g} m "
+                                 f"(kp_zr) differs from TipRad - HubRad = {length:.4g} m; "
+                                 "the BeamDyn length is used")
+        if bd["curve"] > 0:
+            deck.warnings.append(
+                f"{bd['file'].name}: kp_xr, kp_yr (prebend/sweep up to {bd['curve']:.3g} m) "
+                "read but not modelled yet: hawt uses a straight reference line along kp_zr")
+        R = rot1(bd["twist"])
+        deck.notes.append("blade: the full 6x6 stiffness and mass of the BeamDyn blade "
+                          "(CompElast = 2), turned by the initial twist into hawt's blade frame")
+        sec = SectionTable(stations=bd["stations"], mass=bd["M"][:, 0, 0],
+                           i1=bd["M"][:, 3, 3], i2=bd["M"][:, 4, 4], i3=bd["M"][:, 5, 5],
+                           gj=bd["K"][:, 3, 3], ei2=bd["K"][:, 4, 4], ei3=bd["K"][:, 5, 5],
+                           stiffness_6x6=_rotate6(R, bd["K"]), mass_6x6=_rotate6(R, bd["M"]))
+        return Beam(length=bd["length"], sections=sec, elements=ELEMENTS["blade"])
+
+    # ElastoDyn blade (CompElast = 1)
+    fl = deck.vt["ElastoDyn"]
+    names = [fl.get(f"BldFile{k}") for k in (1, 2, 3)[:nb]]
+    if len(set(names)) > 1:
+        raise TurbineFileError(str(ed_file), [f"BldFile1..{nb} = {names}: hawt's blades are "
+                                              "identical; allowed: one blade file"])
+    bfile = deck.path(ed_file.parent, names[0], "ElastoDyn blade")
+    deck.read("ElastoDyn blade", bfile,
+              lambda: deck.reader.read_ElastoDynBlade(str(bfile), 0))
+    vt = deck.vt["ElastoDynBlade"][0]
+    for k in ("FlStTunr1", "FlStTunr2"):
+        deck.number("ElastoDyn blade", k, rule="== 1", vt=vt,
+                    allowed="a modal stiffness tuner applies to ElastoDyn's assumed mode "
+                            "shapes, which hawt's beam does not use; allowed: 1")
+    adj = {k: deck.number("ElastoDyn blade", k, rule="> 0", vt=vt)
+           for k in ("AdjBlMs", "AdjFlSt", "AdjEdSt")}
+    t = _table(deck, "ElastoDyn blade", ("BlFract", "BMassDen", "FlpStff", "EdgStff",
+                                          "StrcTwst"), vt)
+    deck.warnings.append(f"{bfile.name}: BldFl1Sh, BldFl2Sh, BldEdgSh (mode-shape "
+                         "polynomials) and BldFlDmp, BldEdDmp (structural damping) read but "
+                         "not used: hawt's beam elements compute the shapes, undamped")
+    x = t["BlFract"]
+    mass = adj["AdjBlMs"] * t["BMassDen"]
+    ei2, ei3 = adj["AdjFlSt"] * t["FlpStff"], adj["AdjEdSt"] * t["EdgStff"]
+    twist = -np.radians(t["StrcTwst"])
+    if bd is not None:
+        K = _interp(x, bd["stations"], bd["K"])
+        M = _interp(x, bd["stations"], bd["M"])
+        # what the two files say about the same blade (mass and mean stiffness over the span)
+        m_ed, m_bd = (length * np.trapezoid(v, x) for v in (t["BMassDen"], M[:, 0, 0]))
+        k_ed, k_bd = (np.trapezoid(v, x) for v in (t["FlpStff"], K[:, 4, 4]))
+        M = M * adj["AdjBlMs"]
+        deck.notes.append(
+            f"blade: mass, flap and edge stiffness and twist from the ElastoDyn blade "
+            f"{bfile.name} (CompElast = 1, AdjBlMs = {adj['AdjBlMs']:g}); torsion, axial and "
+            f"shear rigidity and section inertias (scaled by AdjBlMs) from the deck's BeamDyn "
+            f"blade {Path(deck.sources['BeamDyn blade']).name}, which ElastoDyn lacks "
+            f"(blade mass without AdjBlMs: {m_ed:.6g} kg ElastoDyn, {m_bd:.6g} kg BeamDyn; "
+            f"span-mean flap stiffness {k_ed:.4g} and {k_bd:.4g} N m^2)")
+        sec = SectionTable(stations=x, mass=mass, i1=M[:, 3, 3], i2=M[:, 4, 4], i3=M[:, 5, 5],
+                           gj=K[:, 3, 3], ei2=ei2, ei3=ei3, ea=K[:, 0, 0], ga2=K[:, 1, 1],
+                           ga3=K[:, 2, 2], twist=twist)
+    else:
+        # ElastoDyn's blade is torsionally rigid with no rotary inertia: a torsion 100 times
+        # stiffer than the bending and a tiny rotary inertia keep hawt's beam close to it
+        gj = 100.0 * np.maximum(ei2, ei3)
+        i23 = 1e-6 * mass
+        deck.warnings.append(
+            f"{bfile.name}: an ElastoDyn blade has no torsional rigidity or section rotary "
+            "inertia and the deck names no BeamDyn blade; hawt takes GJ = 100 max(EI) and "
+            "i2 = i3 = 1e-6 m^2 x mass (a torsionally rigid blade, as ElastoDyn's); give "
+            "them in the hawt file if known")
+        sec = SectionTable(stations=x, mass=mass, i1=2 * i23, i2=i23, i3=i23, gj=gj,
+                           ei2=ei2, ei3=ei3, twist=twist)
+    return Beam(length=length, sections=sec, elements=ELEMENTS["blade"])
+
+
+def _tower(deck: _Deck, ed_file: Path, flexible: bool) -> Beam | None:
+    ed = deck.vt["ElastoDyn"]
+    if not flexible:
+        deck.notes.append("tower: rigid (every tower DOF is False)")
+        return None
+    tfile = deck.path(ed_file.parent, ed.get("TwrFile"), "ElastoDyn tower")
+    deck.read("ElastoDyn tower", tfile, lambda: deck.reader.read_ElastoDynTower(str(tfile)))
+    vt = deck.vt["ElastoDynTower"]
+    for k in ("FAStTunr1", "FAStTunr2", "SSStTunr1", "SSStTunr2"):
+        deck.number("ElastoDyn tower", k, rule="== 1", vt=vt,
+                    allowed="a modal stiffness tuner applies to ElastoDyn's assumed mode "
+                            "shapes, which hawt's beam does not use; allowed: 1")
+    adj = {k: deck.number("ElastoDyn tower", k, rule="> 0", vt=vt)
+           for k in ("AdjTwMa", "AdjFASt", "AdjSSSt")}
+    t = _table(deck, "ElastoDyn tower", ("HtFract", "TMassDen", "TwFAStif", "TwSSStif"), vt)
+    height = deck.number("ElastoDyn", "TowerHt") - deck.number("ElastoDyn", "TowerBsHt")
+    if not height > 0:
+        raise TurbineFileError(str(ed_file), [f"TowerHt - TowerBsHt = {height}: the tower "
+                                              "must have a positive height"])
+    mass = adj["AdjTwMa"] * t["TMassDen"]
+    ei2, ei3 = adj["AdjFASt"] * t["TwFAStif"], adj["AdjSSSt"] * t["TwSSStif"]
+    ei = 0.5 * (ei2 + ei3)
+    gj = 2.0 * TOWER_STEEL["G_over_E"] * ei
+    i23 = ei / TOWER_STEEL["E_over_rho"]
+    deck.warnings.append(
+        f"{tfile.name}: TwFAM1Sh.., TwSSM1Sh.. (mode-shape polynomials) and TwrFADmp, "
+        "TwrSSDmp (structural damping) read but not used: hawt's beam elements compute the "
+        "shapes, undamped")
+    deck.warnings.append(
+        f"{tfile.name}: an ElastoDyn tower has no torsional rigidity or rotary inertia; hawt "
+        "takes those of a thin steel tube with the same bending rigidity (GJ = 2 G/E EI, "
+        "G/E = 0.385; i2 = i3 = EI rho/E, E/rho = 210 GPa / 8500 kg/m^3); axial and shear "
+        "rigid as in ElastoDyn")
+    sec = SectionTable(stations=t["HtFract"], mass=mass, i1=2 * i23, i2=i23, i3=i23, gj=gj,
+                       ei2=ei2, ei3=ei3)
+    return Beam(length=height, sections=sec, elements=ELEMENTS["tower"])
+
+
+def _yaw_spring(deck: _Deck, comp: dict) -> tuple:
+    if not comp["CompServo"]:
+        return 0.0, 0.0
+    try:
+        sd = deck.path(deck.fst.parent, deck.vt["Fst"]["ServoFile"], "ServoDyn")
+        deck.read("ServoDyn", sd, deck.reader.read_ServoDyn)
+    except TurbineFileError as exc:
+        deck.warnings.append(f"ServoDyn not read ({exc}); the yaw spring and damper are 0")
+        return 0.0, 0.0
+    k = deck.number("ServoDyn", "YawSpr", rule=">= 0")
+    c = deck.number("ServoDyn", "YawDamp", rule=">= 0")
+    deck.notes.append(f"yaw bearing: spring {k:.6g} N m/rad and damper {c:.6g} N m s/rad "
+                      "from ServoDyn (YawSpr, YawDamp)")
+    deck.warnings.append(f"{sd.name}: the pitch, torque and yaw controllers are not "
+                         "modelled (fixed pitch, prescribed rotor speed)")
+    return k, c
+
+
+def read_openfast(path) -> ImportResult:
+    """Read an OpenFAST deck (the ``.fst`` file) into a hawt :class:`Turbine`.
+
+    Raises :class:`TurbineFileError` naming the file and key for anything unreadable or
+    unsupported; returns the turbine with the warnings and notes of the import."""
+    fst = Path(path)
+    if fst.suffix.lower() != ".fst":
+        raise TurbineFileError(str(fst), ["an OpenFAST deck is read from its main '.fst' file"])
+    if not fst.is_file():
+        raise TurbineFileError(str(fst), ["file not found"])
+    deck = _Deck(fst.resolve())
+    comp = _main(deck)
+    ed_file = deck.path(deck.fst.parent, deck.vt["Fst"]["EDFile"], "ElastoDyn")
+    deck.read("ElastoDyn", ed_file, lambda: deck.reader.read_ElastoDyn(str(ed_file)))
+    ed = deck.vt["ElastoDyn"]
+    edn = ed_file.name
+    nb = int(deck.number("ElastoDyn", "NumBl", rule="> 0"))
+    if nb not in (1, 2, 3):
+        raise TurbineFileError(str(ed_file), [f"NumBl = {nb}: ElastoDyn allows 1, 2 or 3"])
+    flexible_tower, teeter = _check_dofs(deck, str(ed_file), nb)
+    cones = [deck.number("ElastoDyn", f"PreCone({k})") for k in range(1, nb + 1)]
+    if len(set(cones)) > 1:
+        raise TurbineFileError(str(ed_file), [f"PreCone(1..{nb}) = {cones}: hawt's blades are "
+                                              "identical; allowed: one precone for all"])
+    for k in range(1, nb + 1):
+        for key in (f"TipMass({k})", f"PBrIner({k})", f"BlPIner({k})"):
+            if deck.number("ElastoDyn", key, rule=">= 0"):
+                deck.warnings.append(f"{edn}: {key} = {ed[key]} read but not modelled yet")
+    tip, hubr = deck.number("ElastoDyn", "TipRad"), deck.number("ElastoDyn", "HubRad", rule=">= 0")
+    if not tip > hubr:
+        raise TurbineFileError(str(ed_file), [f"TipRad = {tip}: must exceed HubRad = {hubr}"])
+    for key in ("HubCM", "Delta3") + (("UndSling",) if nb != 2 else ()):
+        if deck.number("ElastoDyn", key):
+            deck.warnings.append(f"{edn}: {key} = {ed[key]} read but not modelled (taken as 0)")
+    rpm = deck.number("ElastoDyn", "RotSpeed", rule=">= 0")
+    if rpm <= 0:
+        raise TurbineFileError(str(ed_file), [f"RotSpeed = {rpm}: hawt needs a turning rotor "
+                                              "(> 0 rpm) for its Floquet analysis"])
+    tilt = math.radians(deck.number("ElastoDyn", "ShftTilt"))
+    overhang = deck.number("ElastoDyn", "OverHang")
+    hub_mass = deck.number("ElastoDyn", "HubMass", rule=">= 0")
+    hub_iner = deck.number("ElastoDyn", "HubIner", rule="> 0")
+    if nb == 2:
+        i_lat = deck.number("ElastoDyn", "HubIner_Teeter", rule=">= 0") or hub_iner
+        hub = Hub(radius=hubr, undersling=deck.number("ElastoDyn", "UndSling"), teeter=teeter,
+                  inertia_lateral=i_lat, inertia_longitudinal=hub_iner, mass=hub_mass,
+                  teeter_damping=(deck.number("ElastoDyn", "TeetDmp", rule=">= 0")
+                                  if teeter and ed.get("TeetMod") == 1 else 0.0))
+    else:
+        # ElastoDyn's hub: a mass at the apex with inertia about the shaft only
+        hub = Hub(radius=hubr, teeter=False, inertia_lateral=0.0,
+                  inertia_longitudinal=hub_iner, mass=hub_mass)
+    yaw_k, yaw_c = _yaw_spring(deck, comp)
+    nac_yaw = deck.number("ElastoDyn", "NacYIner", rule=">= 0")
+    # hawt's yaw inertia includes the hub's share (hawt_core.rigid.kane)
+    ct, st = math.cos(tilt), math.sin(tilt)
+    hub_yaw = (hub.inertia_lateral * ct ** 2 + hub.inertia_longitudinal * st ** 2
+               + hub_mass * (overhang * ct) ** 2)
+    cg = (deck.number("ElastoDyn", "NacCMzn"), -deck.number("ElastoDyn", "NacCMyn"),
+          deck.number("ElastoDyn", "NacCMxn"))
+    nacelle = Nacelle(yaw_inertia=nac_yaw + hub_yaw, yaw_stiffness=yaw_k, yaw_damping=yaw_c,
+                      yaw_to_teeter=overhang, shaft_tilt=tilt,
+                      yaw_free=deck.flag("ElastoDyn", "YawDOF"),
+                      mass=deck.number("ElastoDyn", "NacMass", rule=">= 0"), cg_offset=cg,
+                      shaft_height=deck.number("ElastoDyn", "Twr2Shft"),
+                      yaw_bearing_mass=deck.number("ElastoDyn", "YawBrMass", rule=">= 0"))
+    blade = _blade(deck, comp, ed_file, nb, tip - hubr)
+    tower = _tower(deck, ed_file, flexible_tower)
+    g = deck.number("OpenFAST main", "Gravity", rule=">= 0")
+    name = fst.stem
+    turbine = Turbine(name=name, rotor=Rotor(speed=rpm * math.pi / 30.0, blades=nb,
+                                             precone=math.radians(cones[0])),
+                      hub=hub, nacelle=nacelle, blade=blade, tower=tower,
+                      gravity=Gravity(enabled=g > 0, g=g if g > 0 else 9.81))
+    return ImportResult(turbine=turbine, warnings=deck.warnings, notes=deck.notes,
+                        sources=deck.sources)

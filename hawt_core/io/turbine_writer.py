@@ -1,0 +1,122 @@
+"""The turbine file (YAML): the writer, and an exact comparison of two turbines.
+
+    dump_turbine(turbine, header=None) -> str   # YAML text that loads back to an equal Turbine
+    turbines_equal(a, b) -> bool                # exact field-by-field comparison
+"""
+from __future__ import annotations
+
+from dataclasses import fields, is_dataclass
+from typing import Any
+
+import numpy as np
+import yaml
+
+from ..model import Beam, SectionTable, Turbine
+from .turbine_yaml import MASS_DIAGONAL, MASS_PROPS, SCALAR_PROPS, STIFF_PROPS
+
+__all__ = ["dump_turbine", "turbines_equal"]
+
+
+class _Dumper(yaml.SafeDumper):
+    """Lists of numbers in flow style ``[0.0, 1.0]``, everything else in block style."""
+
+    def represent_list(self, data):
+        flow = all(not isinstance(x, (list, tuple, dict)) for x in data)
+        return self.represent_sequence("tag:yaml.org,2002:seq", data, flow_style=flow)
+
+
+_Dumper.add_representer(list, _Dumper.represent_list)
+
+
+def _compact(a: np.ndarray):
+    """A uniform array as one value (scalar or matrix), otherwise the list per station."""
+    a = np.asarray(a, dtype=float)
+    if len(a) > 0 and np.all(a == a[0]) and not np.any(np.isnan(a)):
+        return a[0].tolist()
+    return a.tolist()
+
+
+def _table_dict(t: SectionTable) -> dict:
+    out = {"stations": t.stations.tolist()}
+    derived = {}
+    if t.mass_6x6 is not None:
+        derived.update({k: t.mass_6x6[:, j, j] for k, j in zip(MASS_PROPS, MASS_DIAGONAL)})
+    if t.stiffness_6x6 is not None:
+        for k, j in zip(STIFF_PROPS, range(6)):
+            diag = t.stiffness_6x6[:, j, j]
+            derived[k] = diag if np.all(np.isfinite(diag)) else None
+    for key in SCALAR_PROPS:
+        value = getattr(t, key)
+        if key in derived:
+            same = (value is None and derived[key] is None) or (
+                value is not None and derived[key] is not None
+                and np.array_equal(value, derived[key]))
+            if same:
+                continue
+        if value is not None:
+            out[key] = _compact(value)
+    for key in ("cg_offset", "tension_offset", "stiffness_6x6", "mass_6x6"):
+        value = getattr(t, key)
+        if value is not None:
+            out[key] = _compact(value)
+    return out
+
+
+def _beam_dict(b: Beam) -> dict:
+    return {"length": float(b.length), "elements": int(b.elements),
+            "sections": _table_dict(b.sections)}
+
+
+def dump_turbine(turbine: Turbine, header: str | None = None) -> str:
+    """YAML text of ``turbine`` that :func:`load_turbine` reads back to an equal Turbine.
+
+    Floats are written with the shortest repr that round-trips exactly; uniform per-station
+    properties are written as one number.  ``header``: comment lines (without ``#``) put on
+    top, e.g. where an imported turbine came from.
+    """
+    r, h, n, g = turbine.rotor, turbine.hub, turbine.nacelle, turbine.gravity
+    data = {
+        "name": str(turbine.name),
+        "rotor": {"speed": float(r.speed), "blades": int(r.blades), "precone": float(r.precone)},
+        "hub": {"radius": float(h.radius), "undersling": float(h.undersling),
+                "teeter": bool(h.teeter), "inertia_lateral": float(h.inertia_lateral),
+                "inertia_longitudinal": float(h.inertia_longitudinal),
+                "teeter_stiffness": float(h.teeter_stiffness),
+                "teeter_damping": float(h.teeter_damping), "mass": float(h.mass),
+                **({"counterweight_mass": float(h.counterweight_mass),
+                    "counterweight_radius": float(h.counterweight_radius)}
+                   if h.counterweight_mass or h.counterweight_radius else {})},
+        "nacelle": {"yaw_inertia": float(n.yaw_inertia), "yaw_stiffness": float(n.yaw_stiffness),
+                    "yaw_damping": float(n.yaw_damping),
+                    "yaw_to_teeter": float(n.yaw_to_teeter), "shaft_tilt": float(n.shaft_tilt),
+                    "yaw_free": bool(n.yaw_free), "mass": float(n.mass),
+                    **({"cg_offset": [float(x) for x in n.cg_offset]}
+                       if any(float(x) != 0.0 for x in n.cg_offset) else {}),
+                    **({"inertia_pitch": float(n.inertia_pitch)} if n.inertia_pitch else {}),
+                    **({"inertia_roll": float(n.inertia_roll)} if n.inertia_roll else {}),
+                    **({"shaft_height": float(n.shaft_height)} if n.shaft_height else {}),
+                    **({"yaw_bearing_mass": float(n.yaw_bearing_mass)}
+                       if n.yaw_bearing_mass else {})},
+        "blade": _beam_dict(turbine.blade),
+        "tower": {"rigid": True} if turbine.tower is None else _beam_dict(turbine.tower),
+        "gravity": {"enabled": bool(g.enabled), "g": float(g.g)},
+    }
+    top = ("# hawt turbine file, written by hawt_core.io.dump_turbine.\n"
+           "# SI units (m, kg, s, N), angles in rad, rotor speed in rad/s; "
+           "see docs/turbine-format.md.\n")
+    if header:
+        top += "".join(f"# {line}\n".replace("# \n", "#\n") for line in header.splitlines())
+    return top + yaml.dump(data, Dumper=_Dumper, sort_keys=False, width=100)
+
+
+def turbines_equal(a: Any, b: Any) -> bool:
+    """True if two Turbines (or model dataclasses) hold exactly the same values."""
+    if is_dataclass(a) and not isinstance(a, type):
+        if type(a) is not type(b):
+            return False
+        return all(turbines_equal(getattr(a, f.name), getattr(b, f.name)) for f in fields(a))
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        if a is None or b is None:
+            return False
+        return np.shape(a) == np.shape(b) and bool(np.array_equal(a, b))
+    return a == b
