@@ -11,8 +11,9 @@ What is read (all files relative to the ``.fst``):
   AdjSSSt applied);
 - BeamDyn blade file (when the deck names one): the full 6x6 stiffness and mass matrices.
   With ``CompElast = 2`` (BeamDyn blades) they are the blade; with ``CompElast = 1`` the
-  ElastoDyn blade is the blade and the BeamDyn file of the same deck supplies what an
-  ElastoDyn blade lacks (torsion, axial and shear rigidity, section rotary inertia);
+  ElastoDyn blade is the blade (inextensible and shear-rigid, as ElastoDyn's) and the BeamDyn
+  file of the same deck supplies what an ElastoDyn blade lacks (torsional rigidity, section
+  rotary inertia);
 - ServoDyn: the yaw spring and damper (YawSpr, YawDamp) that hold the yaw DOF.
 
 Frames and signs (hawt_core.model): hawt's nacelle frame is (y1 up, y2 lateral, y3 downwind),
@@ -380,14 +381,14 @@ def _blade(deck: _Deck, comp: dict, ed_file: Path, nb: int, length: float) -> Be
         M = M * adj["AdjBlMs"]
         deck.notes.append(
             f"blade: mass, flap and edge stiffness and twist from the ElastoDyn blade "
-            f"{bfile.name} (CompElast = 1, AdjBlMs = {adj['AdjBlMs']:g}); torsion, axial and "
-            f"shear rigidity and section inertias (scaled by AdjBlMs) from the deck's BeamDyn "
-            f"blade {Path(deck.sources['BeamDyn blade']).name}, which ElastoDyn lacks "
+            f"{bfile.name} (CompElast = 1, AdjBlMs = {adj['AdjBlMs']:g}), inextensible and "
+            f"shear-rigid as ElastoDyn's; torsional rigidity and section inertias (scaled by "
+            f"AdjBlMs) from the deck's BeamDyn blade "
+            f"{Path(deck.sources['BeamDyn blade']).name}, which ElastoDyn lacks "
             f"(blade mass without AdjBlMs: {m_ed:.6g} kg ElastoDyn, {m_bd:.6g} kg BeamDyn; "
             f"span-mean flap stiffness {k_ed:.4g} and {k_bd:.4g} N m^2)")
         sec = SectionTable(stations=x, mass=mass, i1=M[:, 3, 3], i2=M[:, 4, 4], i3=M[:, 5, 5],
-                           gj=K[:, 3, 3], ei2=ei2, ei3=ei3, ea=K[:, 0, 0], ga2=K[:, 1, 1],
-                           ga3=K[:, 2, 2], twist=twist)
+                           gj=K[:, 3, 3], ei2=ei2, ei3=ei3, twist=twist)
     else:
         # ElastoDyn's blade is torsionally rigid with no rotary inertia: a torsion 100 times
         # stiffer than the bending and a tiny rotary inertia keep hawt's beam close to it

@@ -1,0 +1,286 @@
+"""Real turbines: the OpenFAST importer (hawt_core.io.openfast), the shipped NREL 5-MW and
+IEA 15-MW, the catalog of short names and the commands that use them.
+
+References (numbers hawt does not produce):
+- an independent Euler-Bernoulli solution written here (Hermite cubic elements in flap and
+  edge, principal rigidities turned by the structural twist, centrifugal stiffening and
+  in-plane softening, section rotary inertia; 200 elements: converged to 2e-5) of the same
+  section properties, against hawt's mixed elements extrapolated from N = 32 and 64
+  (Richardson, second order); tolerance 1e-3 on the five lowest flap/edge modes, at 0 rpm and
+  at the rated speed of each turbine;
+- the decks' own files (round trip, what each key says), openfast-io as the reader.
+The deck files come from the rosco wheel (Examples/Test_Cases), never copied into the repo.
+"""
+from __future__ import annotations
+
+import importlib.util
+import shutil
+import warnings
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.linalg as sl
+
+from hawt_core.analyses.blade_modes import blade_modes
+from hawt_core.cli import main as hawt_main
+from hawt_core.io import TurbineFileError, TurbineFileWarning, dump_turbine, load_turbine
+from hawt_core.io import turbines_equal
+from hawt_core.io.catalog import SHIPPED, load_any, shipped_turbines
+
+_spec = importlib.util.find_spec("Examples")
+DECKS = Path(list(_spec.submodule_search_locations)[0]) / "Test_Cases" if _spec else None
+needs_decks = pytest.mark.skipif(
+    DECKS is None or importlib.util.find_spec("openfast_io") is None,
+    reason="needs the rosco wheel (decks) and openfast-io: bash scripts/bootstrap.sh")
+NREL = DECKS / "NREL-5MW" / "NREL-5MW.fst" if DECKS else None
+IEA = (DECKS / "IEA-15-240-RWT" / "IEA-15-240-RWT-Monopile" / "IEA-15-240-RWT-Monopile.fst"
+       if DECKS else None)
+
+
+def quiet_load(spec):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", TurbineFileWarning)
+        return load_any(spec)
+
+
+# ------------------------------------------------------------------ independent reference
+def euler_bernoulli_blade(turbine, omega, n=200):
+    """Frequencies [Hz] of the clamped blade (no precone) by Euler-Bernoulli beam theory."""
+    b = turbine.blade
+    s = b.sections
+    L, e = b.length, turbine.hub.radius
+    xs = s.stations * L
+    twist = s.twist if s.twist is not None else np.zeros(len(xs))
+    nodes = np.linspace(0.0, L, n + 1)
+    ndof = 4 * (n + 1)                       # per node: v, v', w, w' (v along b2, w along b3)
+    K = np.zeros((ndof, ndof))
+    M = np.zeros((ndof, ndof))
+    xf = np.linspace(0.0, L, 4001)
+    q = np.interp(xf, xs, s.mass) * (e + xf) * omega ** 2
+    tension = np.concatenate([[0.0], np.cumsum(0.5 * (q[1:] + q[:-1]) * np.diff(xf))])
+    tension = tension[-1] - tension          # T(x) = Omega^2 int_x^L m (e + xi) dxi
+    xg, wg = np.polynomial.legendre.leggauss(6)
+    for k in range(n):
+        a, h = nodes[k], nodes[k + 1] - nodes[k]
+        idx = 4 * k + np.array([0, 1, 4, 5, 2, 3, 6, 7])
+        for xi, wi in zip(xg, wg):
+            z = 0.5 * (xi + 1.0)
+            x, wq = a + z * h, 0.5 * h * wi
+            N = np.array([1 - 3 * z**2 + 2 * z**3, h * (z - 2 * z**2 + z**3), 3 * z**2 - 2 * z**3,
+                          h * (z**3 - z**2)])
+            dN = np.array([6 * z**2 - 6 * z, h * (1 - 4 * z + 3 * z**2), 6 * z - 6 * z**2,
+                           h * (3 * z**2 - 2 * z)]) / h
+            d2N = np.array([12 * z - 6, h * (6 * z - 4), 6 - 12 * z, h * (6 * z - 2)]) / h**2
+            th = np.interp(x, xs, twist)
+            R = np.array([[np.cos(th), -np.sin(th)], [np.sin(th), np.cos(th)]])
+            D = R @ np.diag([np.interp(x, xs, s.ei2), np.interp(x, xs, s.ei3)]) @ R.T
+            Ir = R @ np.diag([np.interp(x, xs, s.i2), np.interp(x, xs, s.i3)]) @ R.T
+            m = np.interp(x, xs, s.mass)
+            curv = np.zeros((2, 8))                       # (about b2, about b3) = (-w'', v'')
+            curv[0, 4:], curv[1, :4] = -d2N, d2N
+            rot = np.zeros((2, 8))                        # rotations (-w', v')
+            rot[0, 4:], rot[1, :4] = -dN, dN
+            disp = np.zeros((2, 8))
+            disp[0, :4], disp[1, 4:] = N, N
+            slope = np.zeros((2, 8))
+            slope[0, :4], slope[1, 4:] = dN, dN
+            Ke = (curv.T @ D @ curv + np.interp(x, xf, tension) * slope.T @ slope
+                  - omega**2 * m * np.outer(disp[0], disp[0]))   # in-plane softening
+            Me = m * disp.T @ disp + rot.T @ Ir @ rot
+            K[np.ix_(idx, idx)] += wq * Ke
+            M[np.ix_(idx, idx)] += wq * Me
+    lam = sl.eigh(K[4:, 4:], M[4:, 4:], eigvals_only=True, subset_by_index=[0, 7])
+    return np.sqrt(lam) / (2 * np.pi)
+
+
+@pytest.mark.parametrize("name", ["nrel5mw", "iea15mw"])
+@pytest.mark.parametrize("at", ["standstill", "rated"])
+def test_shipped_blades_match_an_independent_euler_bernoulli_solution(name, at):
+    t = quiet_load(name)
+    t = replace(t, rotor=replace(t.rotor, precone=0.0))
+    omega = 0.0 if at == "standstill" else t.rotor.speed
+    ref = euler_bernoulli_blade(t, omega)[:5]
+    f = []
+    for n in (32, 64):
+        r = blade_modes(t, elements=n, rotor_speed=omega, count=8)
+        f.append(np.array([m.frequency_hz for m in r.modes
+                           if m.family in ("flap", "lag")][:5]))
+    richardson = f[1] + (f[1] - f[0]) / 3.0
+    np.testing.assert_allclose(richardson, ref, rtol=1e-3)
+    # and the extrapolation is what makes it: N = 32 alone is off by more than that
+    assert np.max(np.abs(f[0] / ref - 1)) > 1e-3
+
+
+# ------------------------------------------------------------------ importer
+@needs_decks
+def test_shipped_files_are_what_the_importer_makes_of_the_rosco_decks():
+    from hawt_core.io.openfast import read_openfast
+    for name, deck in (("nrel5mw", NREL), ("iea15mw", IEA)):
+        shipped = quiet_load(name)
+        fresh = replace(read_openfast(deck).turbine, name=name)
+        assert turbines_equal(shipped, fresh), name
+
+
+@needs_decks
+def test_nrel5mw_deck_values_land_where_the_model_expects_them():
+    from hawt_core.io.openfast import read_openfast
+    r = read_openfast(NREL)
+    t = r.turbine
+    # ElastoDyn main file of the deck (NRELOffshrBsline5MW_Onshore_ElastoDyn.dat)
+    assert t.rotor.blades == 3 and t.rotor.speed == pytest.approx(12.1 * np.pi / 30)
+    assert t.rotor.precone == pytest.approx(np.radians(-2.5))
+    assert t.hub.radius == 1.5 and t.hub.mass == 56780.0
+    assert t.hub.inertia_longitudinal == 115926.0 and not t.hub.teeter
+    n = t.nacelle
+    assert n.yaw_to_teeter == -5.0191 and n.shaft_tilt == pytest.approx(np.radians(-5.0))
+    assert n.shaft_height == 1.96256 and n.mass == 240000.0
+    assert n.cg_offset == (1.75, -0.0, 1.9)            # (up, lateral, downwind) = (zn, -yn, xn)
+    assert n.yaw_stiffness == 9028320000.0            # ServoDyn YawSpr
+    # hawt's yaw inertia = NacYIner + the hub's share (rigid hub: HubIner sin^2 + m d^2 cos^2)
+    share = 115926.0 * np.sin(n.shaft_tilt) ** 2 + 56780.0 * (5.0191 * np.cos(n.shaft_tilt)) ** 2
+    assert n.yaw_inertia == pytest.approx(2.60789e6 + share, rel=1e-12)
+    # blade: ElastoDyn blade file with AdjBlMs applied, twist towards feather = minus hawt's
+    assert t.blade.length == 61.5
+    assert t.blade.sections.mass[0] == pytest.approx(678.935 * 1.04536)
+    assert t.blade.sections.ei2[0] == 1.811e10 and t.blade.sections.ei3[0] == 1.81136e10
+    assert t.blade.sections.twist[0] == pytest.approx(-np.radians(13.308))
+    assert t.blade.sections.gj[0] == 5.5644e9                       # from the BeamDyn blade
+    assert t.blade.sections.rigid_directions() == ("ea", "ga2", "ga3")   # as ElastoDyn
+    assert t.tower.length == 87.6 and t.tower.sections.ei2[0] == 6.14343e11
+    assert t.gravity.enabled and t.gravity.g == 9.80665
+    joined = " ".join(r.warnings)
+    for word in ("BldFl1Sh", "TwFAM1Sh", "DTTorSpr", "CompAero", "torsional rigidity"):
+        assert word in joined, word
+
+
+@needs_decks
+def test_round_trip_openfast_to_hawt_yaml_and_back(tmp_path):
+    from hawt_core.io.openfast import read_openfast
+    r = read_openfast(NREL)
+    f = tmp_path / "n.yaml"
+    f.write_text(dump_turbine(r.turbine, header=r.header()))
+    back = load_turbine(f)
+    assert turbines_equal(replace(back, name=r.turbine.name), r.turbine)
+    assert "openfast-io" in f.read_text().splitlines()[2]
+
+
+def _deck_copy(tmp_path) -> Path:
+    d = tmp_path / "deck"
+    shutil.copytree(NREL.parent, d, ignore=shutil.ignore_patterns("Airfoils", "AeroData"))
+    return d
+
+
+def _edit(path: Path, key: str, value: str):
+    lines = path.read_text().splitlines()
+    for i, line in enumerate(lines):
+        tok = line.split()
+        if len(tok) > 1 and tok[1] == key:
+            lines[i] = f"{value:>12s}   {key}" + line.split(key, 1)[1]
+            path.write_text("\n".join(lines) + "\n")
+            return i + 1
+    raise AssertionError(key)
+
+
+@needs_decks
+@pytest.mark.parametrize("file,key,value,words", [
+    ("NRELOffshrBsline5MW_Onshore_ElastoDyn.dat", "TipRad", "sixty", ["TipRad", "line", "number"]),
+    ("NRELOffshrBsline5MW_Blade.dat", "FlStTunr(1)", "1.2", ["FlStTunr1", "allowed: 1"]),
+    ("NRELOffshrBsline5MW_Onshore_ElastoDyn.dat", "PitchDOF", "True", ["PitchDOF", "False"]),
+    ("NRELOffshrBsline5MW_Onshore_ElastoDyn.dat", "TwSSDOF2", "False",
+     ["TwFADOF1", "all True or all False"]),
+    ("NRELOffshrBsline5MW_Onshore_ElastoDyn.dat", "PreCone(2)", "-3", ["PreCone", "identical"]),
+    ("NRELOffshrBsline5MW_Onshore_ElastoDyn.dat", "BldFile(1)", '"other.dat"',
+     ["BldFile1", "identical"]),
+    ("NRELOffshrBsline5MW_Onshore_ElastoDyn.dat", "TwrFile", '"nowhere.dat"',
+     ["ElastoDyn tower", "nowhere.dat", "not found"]),
+    ("NREL-5MW.fst", "CompElast", "3", ["CompElast", "ElastoDyn"]),
+])
+def test_bad_decks_get_one_error_naming_file_key_and_what_is_allowed(tmp_path, file, key,
+                                                                     value, words):
+    from hawt_core.io.openfast import read_openfast
+    d = _deck_copy(tmp_path)
+    _edit(d / file, key, value)
+    with pytest.raises(TurbineFileError) as e:
+        read_openfast(d / "NREL-5MW.fst")
+    msg = str(e.value)
+    for w in words:
+        assert w in msg, (w, msg)
+
+
+@needs_decks
+def test_a_file_openfast_io_cannot_parse_is_named_in_the_error():
+    from hawt_core.io.openfast import read_openfast
+    # BAR_10's BeamDyn file is in a layout openfast-io 5.0 does not read
+    with pytest.raises(TurbineFileError, match="BAR_10_BeamDyn.dat.*BeamDyn file by openfast-io"):
+        read_openfast(DECKS / "BAR_10" / "BAR_10.fst")
+
+
+@needs_decks
+def test_elastodyn_only_deck_estimates_torsion_with_a_warning():
+    from hawt_core.io.openfast import read_openfast
+    r = read_openfast(DECKS / "NREL_2p8_127" / "NREL-2p8-127.fst")
+    assert r.turbine.tower is None                      # every tower DOF False -> rigid
+    assert any("no torsional rigidity" in w and "GJ = 100 max(EI)" in w for w in r.warnings)
+    s = r.turbine.blade.sections
+    np.testing.assert_allclose(s.gj, 100 * np.maximum(s.ei2, s.ei3))
+
+
+# ------------------------------------------------------------------ catalog and commands
+def test_every_shipped_turbine_loads_and_is_listed(capsys):
+    rows = shipped_turbines()
+    assert [r["name"] for r in rows] == list(SHIPPED)
+    assert all(r["description"] for r in rows)
+    assert hawt_main(["turbines"]) == 0
+    out = capsys.readouterr().out
+    assert "nrel5mw" in out and "iea15mw" in out and "NREL 5-MW" in out
+
+
+def test_unknown_short_name_lists_the_shipped_ones(capsys):
+    assert hawt_main(["blade-modes", "nrel7mw"]) == 2
+    err = capsys.readouterr().err
+    assert "nrel7mw" in err and "nrel5mw" in err and "hawt turbines" in err
+
+
+def test_blade_modes_by_short_name(capsys):
+    assert hawt_main(["blade-modes", "nrel5mw", "--count", "3", "-n", "12"]) == 0
+    out = capsys.readouterr().out
+    assert "flap 1" in out and "lag 1" in out
+
+
+@needs_decks
+def test_import_command_writes_a_file_and_prints_the_warnings(tmp_path, capsys):
+    out = tmp_path / "t.yaml"
+    assert hawt_main(["import", "openfast", str(NREL), "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "hawt: warning:" in err and "BldFl1Sh" in err
+    assert turbines_equal(replace(load_turbine(out), name="x"),
+                          replace(quiet_load("nrel5mw"), name="x"))
+
+
+@needs_decks
+def test_commands_take_an_fst_directly(capsys):
+    assert hawt_main(["blade-modes", str(NREL), "--count", "2", "-n", "8"]) == 0
+    cap = capsys.readouterr()
+    assert "flap 1" in cap.out and "hawt: warning:" in cap.err
+
+
+def test_yaw_bearing_mass_is_a_nacelle_point_mass_at_the_tower_top():
+    """Two code paths, one physics: a yaw-bearing point mass m at the tower-top point gives
+    the same tower modes as a nacelle of mass m with its mass centre there and no inertia of
+    its own beyond the yaw axis' (frequencies to 1e-9)."""
+    from hawt_core.analyses.modal import modal_analysis
+    t = load_turbine(Path(__file__).resolve().parents[1] / "hawt_core" / "data"
+                     / "three_blade_rotor.yaml")
+    from hawt_core.model import Beam, SectionTable
+    tower = Beam(length=20.0, elements=4, sections=SectionTable.uniform(
+        mass=800.0, i1=20.0, i2=10.0, i3=10.0, gj=4e9, ei2=3e9, ei3=3e9))
+    base = replace(t, tower=tower, nacelle=replace(t.nacelle, yaw_free=False))
+    a = replace(base, nacelle=replace(base.nacelle, yaw_bearing_mass=3000.0))
+    b = replace(base, nacelle=replace(base.nacelle, mass=base.nacelle.mass + 3000.0))
+    fa = sorted(m.frequency_hz for m in modal_analysis(a, elements=3).modes)
+    fb = sorted(m.frequency_hz for m in modal_analysis(b, elements=3).modes)
+    fc = sorted(m.frequency_hz for m in modal_analysis(base, elements=3).modes)
+    np.testing.assert_allclose(fa, fb, rtol=1e-9)
+    assert np.max(np.abs(np.array(fa[:3]) / np.array(fc[:3]) - 1)) > 1e-3   # the mass matters
