@@ -34,7 +34,7 @@ SHIPPED = {
 
 
 def shipped_path(name: str) -> Path:
-    """The file of a shipped turbine; KeyError-free: unknown names raise TurbineFileError."""
+    """The file of a shipped turbine; an unknown name raises TurbineFileError listing them."""
     if name not in SHIPPED:
         raise TurbineFileError(name, [f"not a file and not a shipped turbine; shipped: "
                                       f"{', '.join(SHIPPED)} (hawt turbines lists them)"])
@@ -66,7 +66,7 @@ def shipped_turbines() -> list:
             t = load_turbine(p)
         out.append({"name": name, "file": str(p), "description": describe(p),
                     "blades": t.rotor.blades,
-                    "rotor_radius_m": t.hub.radius + t.blade.length * 1.0,
+                    "rotor_radius_m": t.hub.radius + t.blade.length,
                     "tower": "rigid" if t.tower is None else f"flexible, {t.tower.length:g} m",
                     "rotor_speed": t.rotor.speed, "elements": t.blade.elements})
     return out
