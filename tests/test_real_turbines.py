@@ -284,3 +284,52 @@ def test_yaw_bearing_mass_is_a_nacelle_point_mass_at_the_tower_top():
     fc = sorted(m.frequency_hz for m in modal_analysis(base, elements=3).modes)
     np.testing.assert_allclose(fa, fb, rtol=1e-9)
     assert np.max(np.abs(np.array(fa[:3]) / np.array(fc[:3]) - 1)) > 1e-3   # the mass matters
+
+
+# ------------------------------------------------------------------ NREL 5-MW full system
+#: Jonkman, Butterfield, Musial, Scott, "Definition of a 5-MW Reference Wind Turbine for
+#: Offshore System Development", NREL/TP-500-38060 (2009), Table 9-1 "Full-system natural
+#: frequencies in hertz" (rotor at rest): (hawt label, index within its label, FAST, ADAMS).
+#: The 1st drivetrain torsion (0.6205, 0.6094) needs the drivetrain (not modelled yet); the
+#: 2nd tower side-side (2.9361, 2.9408) is a documented discrepancy (docs/VALIDATION.md).
+JONKMAN_2009_TABLE_9_1 = [
+    ("tower fore-aft", 1, 0.3240, 0.3195),
+    ("tower side-side", 1, 0.3120, 0.3164),
+    ("flap cyclic", 1, 0.6664, 0.6296),          # 1st blade asymmetric flapwise yaw
+    ("flap cyclic", 2, 0.6675, 0.6686),          # 1st blade asymmetric flapwise pitch
+    ("flap collective", 1, 0.6993, 0.7019),
+    ("lag cyclic", 1, 1.0793, 1.0740),           # 1st blade asymmetric edgewise pitch
+    ("lag cyclic", 2, 1.0898, 1.0877),           # 1st blade asymmetric edgewise yaw
+    ("flap cyclic", 3, 1.9337, 1.6507),          # 2nd blade asymmetric flapwise yaw
+    ("flap cyclic", 4, 1.9223, 1.8558),          # 2nd blade asymmetric flapwise pitch
+    ("flap collective", 2, 2.0205, 1.9601),
+    ("tower fore-aft", 2, 2.9003, 2.8590),
+]
+
+
+def test_nrel5mw_full_system_at_rest_within_the_spread_of_fast_and_adams():
+    """Reference: Jonkman et al. 2009, Table 9-1 (above).  Tolerance: each hawt frequency lies
+    within the interval of the two published values widened by their spread, and by at least
+    1 % of the value (hawt's model differs from both as they differ from each other).  Without
+    gravity, as hawt's tower frequencies show the published ones do (with the deck's gravity
+    the P-delta softening of the 350 t tower-top mass lowers the first tower modes 1.8 %,
+    below the band).  Blades with 48 elements (0.2 % from converged), tower 12."""
+    from hawt_core.analyses.modal import modal_analysis
+    t = quiet_load("nrel5mw")
+    t = replace(t, gravity=replace(t.gravity, enabled=False))
+    r = modal_analysis(t, rotor_speed=0.0, elements=48, max_per_rev=3.2)
+    assert r.standstill and r.to_dict()["modes"][0]["frequency_per_rev"] is None
+    got = {}
+    for m in r.modes:
+        got.setdefault(f"{m.family} {m.symmetry}", []).append(m.frequency_hz)
+    report = []
+    for label, k, fast, adams in JONKMAN_2009_TABLE_9_1:
+        f = got[label][k - 1]
+        lo, hi = min(fast, adams), max(fast, adams)
+        pad = max(hi - lo, 0.01 * f)
+        report.append((label, k, f, fast, adams))
+        assert lo - pad <= f <= hi + pad, (label, k, f, fast, adams)
+    # the check can fail: the tower fore-aft mode with the deck's gravity is below its band
+    g = modal_analysis(quiet_load("nrel5mw"), rotor_speed=0.0, elements=48, max_per_rev=0.5)
+    fa = [m.frequency_hz for m in g.modes if m.symmetry == "fore-aft"][0]
+    assert fa < 0.3150

@@ -65,8 +65,15 @@ def label_modes(model: TurbineModel, fl, columns) -> list:
             off = lay.blade_offset(k)
             energy += classify_energy(model.beam, x[off:off + model.beam.n])
         tower, tower_dir = _tower_motion(model, x) if lay.has_tower else (0.0, None)
+        # strain energy in the tower against that in the blades: a tower mode of a large
+        # rotor drags long, soft blades along (their tips flap more than the tower top moves)
+        # while the tower holds most of the strain energy
+        tower_energy = (float(classify_energy(model.tower, x[lay.tower_offset:
+                                                              lay.tower_offset + model.tower.n]).sum())
+                        if lay.has_tower else 0.0)
+        tower_owns = tower > 0 and (tower >= elastic or tower_energy > float(energy.sum()))
         rig_name = None
-        if tower > 0 and tower >= max([elastic] + [0.25 * r for r in rigid.values()]):
+        if tower_owns and tower >= max([0.0] + [0.25 * r for r in rigid.values()]):
             # the tower's elastic motion dominates: a tower mode (symmetry = direction). A
             # tower torsion under a free yaw bearing turns the yaw angle (relative to the
             # tower top) as much as the tower twists, and tower bending swings a free yaw and

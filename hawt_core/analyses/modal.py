@@ -65,6 +65,10 @@ DEFAULT_STEPS = {"radau": 400, "paper": 1000}
 #: resolution of the default 400 Radau IIA steps, steps / 8).
 DEFAULT_MAX_PER_REV = 50.0
 
+#: Nominal period [s] of the constant-coefficient analysis of a standing rotor (rotor speed
+#: 0): there is no revolution, and with T = 1 s the machinery's "per-rev" numbers are Hz.
+STANDSTILL_PERIOD = 1.0
+
 #: Relative residual above which the blade-relabelling symmetry is taken not to hold.
 SYMMETRY_TOL = 1e-8
 
@@ -102,9 +106,9 @@ def validate_request(elements=None, rotor_speed=None, steps=None, method=None,
                              f"{MAX_ELEMENTS} per blade")
     if rotor_speed is not None:
         r = float(rotor_speed)
-        if not np.isfinite(r) or r <= 0:
+        if not np.isfinite(r) or r < 0:
             raise ValueError(f"rotor_speed: {rotor_speed!r} is not allowed; need a finite "
-                             "number > 0 [rad/s]")
+                             "number >= 0 [rad/s] (0: a standing rotor)")
     if steps is not None:
         if isinstance(steps, bool) or not float(steps).is_integer() or not MIN_STEPS <= int(steps) <= MAX_STEPS:
             raise ValueError(f"steps: {steps!r} is not allowed; need an integer from {MIN_STEPS} "
@@ -159,6 +163,20 @@ def periodic_dae(model: TurbineModel, steady, check_symmetry: bool = True) -> Li
             dae = LinearPeriodicDAE(dae.E, dae.A, model.period, model.differential)
             dae.symmetry_error = err
     return dae
+
+
+def _standstill_dae(model: TurbineModel):
+    """The static equilibrium of a standing rotor (gravity included) and its linearization as
+    a constant-coefficient DAE with the nominal period STANDSTILL_PERIOD."""
+    from ..solvers.periodic import PeriodicSteadyState
+    from ..solvers.steady import constant_steady_state
+    y = constant_steady_state(model)
+    steady = PeriodicSteadyState(times=np.array([0.0]), states=y[None],
+                                 period=STANDSTILL_PERIOD, iterations=0, constant=True)
+    Jy, Jd = model.jacobians(np.zeros(model.n), y, 0.0)
+    A = -Jy
+    return steady, LinearPeriodicDAE(lambda t: Jd, lambda t: A, STANDSTILL_PERIOD,
+                                     model.differential)
 
 
 def dynamic_dimension(dae: LinearPeriodicDAE) -> int:
@@ -252,13 +270,14 @@ def _hill_floquet(model: TurbineModel, dae: LinearPeriodicDAE, transform, max_pe
     (constant for an isotropic rotor without gravity: one eigenproblem).  Returns the
     rotating-frame FloquetResult (samples x(t) = T(t) q(t) e^{eta t} over a revolution, so that
     labels, shapes and Campbell tracking work as for the marching) and the HillModes."""
-    omega = model.rotor_speed
+    # the rotor period (a multi-blade DAE's own period is T / Nb), nominal at standstill
+    T = model.period if np.isfinite(model.period) else STANDSTILL_PERIOD
+    omega = 2 * np.pi / T
     srows = np.unique(rows)
     pos = {int(r): i for i, r in enumerate(srows)}
     obs = np.array([pos[int(r)] for r in rows])
     frame_rows = rows
     hm = hill_modes(dae, max_per_rev * omega, observed=frame_rows, weights=wts ** 2)
-    T = model.period
     M = int(min(MAX_SAMPLES, max(128, 2 ** np.ceil(np.log2(2.5 * max_per_rev)))))
     tm = np.arange(M) * T / M
     lam = hm.exponents
@@ -324,15 +343,24 @@ def _modal_analysis(turbine, elements, rotor_speed, steps, method, fast, harmoni
 
     stage(0.0, "building the model")
     model = TurbineModel(turbine, elements=elements, rotor_speed=rotor_speed)
+    standstill = model.rotor_speed == 0.0
     stage(0.05, "steady state")
-    steady = periodic_steady_state(model, harmonics=harmonics)
+    if standstill:
+        if method in ("radau", "paper"):
+            raise ValueError(f"method: {method!r} is not allowed for a standing rotor (rotor "
+                             "speed 0, no period to march over); use auto or hill")
+        steady, dae = _standstill_dae(model)
+    else:
+        steady = periodic_steady_state(model, harmonics=harmonics)
     timings["steady_state"] = time.perf_counter() - t0
     stage(0.2, "linearization")
-    dae = periodic_dae(model, steady)
-    transform = MultiBladeTransform(model) if model.n_blades >= 3 else None
+    if not standstill:
+        dae = periodic_dae(model, steady)
+    # a standing rotor is time-invariant as it is: its rotating frame is the fixed frame
+    transform = MultiBladeTransform(model) if model.n_blades >= 3 and not standstill else None
     mbc = transform.dae(dae) if transform is not None and dae.S is not None else None
     if method == "auto":
-        method = "hill" if mbc is not None and steady.constant else "radau"
+        method = "hill" if (mbc is not None and steady.constant) or standstill else "radau"
     use_fast = dae.S is not None if fast is None else (bool(fast) and dae.S is not None)
     rows, wts = model.display_rows()
     # the dominant harmonic is judged on displacement-like rows weighted to tip metres
@@ -347,7 +375,7 @@ def _modal_analysis(turbine, elements, rotor_speed, steps, method, fast, harmoni
                                                         rows, wts, d)
     else:
         limit = float(max_per_rev) if max_per_rev is not None else DEFAULT_MAX_PER_REV
-        frame = "multi-blade" if mbc is not None else "rotating"
+        frame = "multi-blade" if mbc is not None else ("fixed" if standstill else "rotating")
         stage(0.3, f"Hill's method ({frame} frame, modes below {limit:g} per-rev)")
         fl, hm = _hill_floquet(model, mbc if mbc is not None else dae,
                                transform if mbc is not None else None, limit, rows, wts, d)
@@ -366,7 +394,8 @@ def _modal_analysis(turbine, elements, rotor_speed, steps, method, fast, harmoni
         modes.sort(key=lambda m: (m.frequency_per_rev, m.real_per_rev))
     number_modes(modes)
     settings = {"turbine": turbine.name, "elements": model.beam.N, "rotor_speed": omega,
-                "method": method, "steps": steps, "fast": bool(use_fast),
+                "method": "standstill" if standstill else method, "steps": steps,
+                "fast": bool(use_fast),
                 "blades": model.n_blades, "resolution_per_rev": limit,
                 "steady_state": "constant" if steady.constant
                 else f"periodic ({harmonics} harmonics)", **extra}

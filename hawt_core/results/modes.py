@@ -78,8 +78,18 @@ class ModalResult:
     compute_time: float = 0.0
     timings: dict = field(default_factory=dict)
 
+    @property
+    def standstill(self) -> bool:
+        """A standing rotor (rotor speed 0): no revolution, frequencies in Hz only."""
+        return self.settings.get("method") == "standstill"
+
     def to_dict(self) -> dict:
-        return {"settings": self.settings, "modes": [m.to_dict() for m in self.modes],
+        modes = [m.to_dict() for m in self.modes]
+        if self.standstill:          # no per-rev without a revolution: Hz and the real part
+            for d in modes:
+                d["real_hz"] = d.pop("real_per_rev")
+                d["frequency_per_rev"] = None
+        return {"settings": self.settings, "modes": modes,
                 "unresolved_modes": self.unresolved, "compute_time": self.compute_time}
 
     def to_json(self, **kw) -> str:
@@ -93,14 +103,17 @@ class ModalResult:
 
     def table(self) -> str:
         s = self.settings
-        if s["method"] in ("radau", "paper"):
+        if self.standstill:
+            how = "standing rotor: one eigenproblem about the static equilibrium"
+        elif s["method"] in ("radau", "paper"):
             how = f"{s['method']}, {s['steps']} steps/period{', fast Floquet' if s['fast'] else ''}"
         elif s.get("frame") == "multi-blade" and not s.get("hill_harmonics"):
             how = "multi-blade coordinates, time-invariant: one eigenproblem"
         else:
             how = (f"Hill's method, {s.get('frame', 'rotating')} frame, "
                    f"{s.get('hill_harmonics', 0)} harmonics")
-        header = (f"Dominant frequencies of the turbine '{s['turbine']}' (Floquet, {how}), "
+        kind = "Modes" if self.standstill else "Dominant frequencies"
+        header = (f"{kind} of the turbine '{s['turbine']}' ({'' if self.standstill else 'Floquet, '}{how}), "
                   f"{s['elements']} elements per blade, rotor speed {s['rotor_speed']:.4g} rad/s")
         footer = []
         if self.unresolved:
@@ -108,10 +121,12 @@ class ModalResult:
                 footer.append(f"({self.unresolved} mesh modes above the temporal resolution "
                               f"{s['resolution_per_rev']:.0f} per-rev not shown: raise --steps)")
             else:
-                footer.append(f"({self.unresolved} modes above {s['resolution_per_rev']:.0f} "
-                              "per-rev not shown: raise --max-per-rev)")
+                unit = "Hz" if self.standstill else "per-rev"
+                footer.append(f"({self.unresolved} modes above {s['resolution_per_rev']:g} "
+                              f"{unit} not shown: raise --max-per-rev)")
         footer.append(f"computed in {self.compute_time:.2f} s")
-        return format_table(header, self.modes, footer)
+        return format_table(header, self.modes, footer,
+                            unit="Hz" if self.standstill else "per-rev")
 
     def shape_samples(self, mode: Mode):
         """Periodic eigenvector of ``mode`` over one revolution: (times (M,), states (M, n)).

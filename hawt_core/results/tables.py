@@ -36,18 +36,19 @@ def _fixed(m):
     return None if not getattr(m, "whirl", None) or f is None or not np.isfinite(f) else f
 
 
-def format_table(header: str, modes, footer=()) -> str:
+def format_table(header: str, modes, footer=(), unit: str = "per-rev") -> str:
     """The modes as a table like the paper's Table 2. ``modes``: objects with the attributes
     family, symmetry, index, frequency_per_rev, real_per_rev, frequency_hz, damping_ratio
     (Mode, or the hawt_msgs/Mode message of the ROS service).  Three or more blades (modes
     with fixed-frame fields): the fixed-frame eigenvalue, Hz and damping ratio, and the
-    rotating-frame dominant frequency beside them."""
+    rotating-frame dominant frequency beside them.  ``unit``: of the eigenvalue column
+    ("Hz" for a standing rotor, whose eigenvalues are given divided by 2 pi)."""
     fixed = bool(modes) and all(_fixed(m) is not None for m in modes)
     if fixed:
         lines = [header, f"{'mode':<30}{'fixed-frame eigenvalue (per-rev)':>34}{'Hz':>11}"
                          f"{'damping':>11}{'rotating':>11}"]
     else:
-        lines = [header, f"{'mode':<30}{'eigenvalue (per-rev)':>28}{'Hz':>11}{'damping':>11}"]
+        lines = [header, f"{'mode':<30}{f'eigenvalue ({unit})':>28}{'Hz':>11}{'damping':>11}"]
     for m in modes:
         name = mode_name(m)
         if fixed:

@@ -12,7 +12,8 @@ __all__ = ["constant_steady_state", "is_time_invariant_at", "ignorable_columns"]
 
 def is_time_invariant_at(model, y, times=None, tol=1e-9) -> bool:
     """True when ``R(0, y, t)`` stays zero over a revolution (a constant steady state)."""
-    times = np.linspace(0, model.period, 7)[:-1] if times is None else times
+    if times is None:     # a standing rotor (period infinite) does not change with time
+        times = np.linspace(0, model.period, 7)[:-1] if np.isfinite(model.period) else [0.0]
     z = np.zeros(model.n)
     scale = max(1.0, np.abs(model.residual(z, model.initial_guess(), 0.0)).max())
     return all(np.abs(model.residual(z, y, t)).max() <= tol * scale for t in times)
