@@ -189,6 +189,31 @@ class Rotor:
     precone: float = 0.0
 
 
+#: What a drivetrain's generator does: "prescribed" (it turns at the rotor speed times the
+#: gear ratio, held by its torque: the paper's constant-speed rotor, here behind a flexible
+#: shaft) or "free" (no torque: the whole drivetrain may turn, a zero-frequency mode).
+GENERATOR_MODES = ("prescribed", "free")
+
+
+@dataclass(frozen=True)
+class Drivetrain:
+    """Low-speed shaft between the hub and the gearbox, and the generator behind it.
+
+    ``stiffness`` [N m/rad] and ``damping`` [N m s/rad] of the shaft's torsion (ElastoDyn
+    DTTorSpr, DTTorDmp; ``stiffness`` None: a rigid shaft); ``generator_inertia`` [kg m^2]
+    of the generator rotor about the high-speed shaft (GenIner), which turns at
+    ``gearbox_ratio`` times the low-speed shaft (GBRatio); ``generator``: one of
+    GENERATOR_MODES.  New DOFs (hawt_core.rigid.kane): the shaft twist (rotor azimuth minus
+    the gearbox-input azimuth) and, with a free generator, the gearbox-input azimuth.
+    """
+
+    stiffness: Optional[float] = None
+    damping: float = 0.0
+    generator_inertia: float = 0.0
+    gearbox_ratio: float = 1.0
+    generator: str = "prescribed"
+
+
 @dataclass(frozen=True)
 class Gravity:
     enabled: bool = False
@@ -197,7 +222,8 @@ class Gravity:
 
 @dataclass(frozen=True, eq=False)
 class Turbine:
-    """A whole turbine. ``tower`` None means a rigid tower (the paper's example)."""
+    """A whole turbine. ``tower`` None means a rigid tower (the paper's example);
+    ``drivetrain`` None a rigid shaft turning at the prescribed rotor speed (the paper's)."""
 
     name: str
     rotor: Rotor
@@ -206,6 +232,7 @@ class Turbine:
     blade: Beam
     tower: Optional[Beam] = None
     gravity: Gravity = field(default_factory=Gravity)
+    drivetrain: Optional[Drivetrain] = None
 
     def with_rotor_speed(self, speed: float) -> "Turbine":
         return replace(self, rotor=replace(self.rotor, speed=float(speed)))

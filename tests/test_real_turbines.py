@@ -151,8 +151,11 @@ def test_nrel5mw_deck_values_land_where_the_model_expects_them():
     assert t.tower.length == 87.6 and t.tower.sections.ei2[0] == 6.14343e11
     assert t.gravity.enabled and t.gravity.g == 9.80665
     joined = " ".join(r.warnings)
-    for word in ("BldFl1Sh", "TwFAM1Sh", "DTTorSpr", "CompAero", "torsional rigidity"):
+    for word in ("BldFl1Sh", "TwFAM1Sh", "CompAero", "torsional rigidity"):
         assert word in joined, word
+    d = t.drivetrain                 # DrTrDOF, GenDOF: shaft torsion and a free generator
+    assert (d.stiffness, d.damping, d.generator_inertia, d.gearbox_ratio, d.generator) == (
+        867637000.0, 6215000.0, 534.116, 97.0, "free")
 
 
 @needs_decks
@@ -290,11 +293,11 @@ def test_yaw_bearing_mass_is_a_nacelle_point_mass_at_the_tower_top():
 #: Jonkman, Butterfield, Musial, Scott, "Definition of a 5-MW Reference Wind Turbine for
 #: Offshore System Development", NREL/TP-500-38060 (2009), Table 9-1 "Full-system natural
 #: frequencies in hertz" (rotor at rest): (hawt label, index within its label, FAST, ADAMS).
-#: The 1st drivetrain torsion (0.6205, 0.6094) needs the drivetrain (not modelled yet); the
-#: 2nd tower side-side (2.9361, 2.9408) is a documented discrepancy (docs/VALIDATION.md).
+#: The 2nd tower side-side (2.9361, 2.9408) is a documented discrepancy (docs/VALIDATION.md).
 JONKMAN_2009_TABLE_9_1 = [
     ("tower fore-aft", 1, 0.3240, 0.3195),
     ("tower side-side", 1, 0.3120, 0.3164),
+    ("drivetrain None", 1, 0.6205, 0.6094),      # 1st drivetrain torsion
     ("flap cyclic", 1, 0.6664, 0.6296),          # 1st blade asymmetric flapwise yaw
     ("flap cyclic", 2, 0.6675, 0.6686),          # 1st blade asymmetric flapwise pitch
     ("flap collective", 1, 0.6993, 0.7019),
@@ -313,10 +316,13 @@ def test_nrel5mw_full_system_at_rest_within_the_spread_of_fast_and_adams():
     1 % of the value (hawt's model differs from both as they differ from each other).  Without
     gravity, as hawt's tower frequencies show the published ones do (with the deck's gravity
     the P-delta softening of the 350 t tower-top mass lowers the first tower modes 1.8 %,
-    below the band).  Blades with 48 elements (0.2 % from converged), tower 12."""
+    below the band).  Blades with 48 elements (0.2 % from converged), tower 12.  The
+    generator held (the rotor at rest is parked: with a free generator the drivetrain
+    torsion is a free-free mode near 2 Hz, not the published 0.62 Hz)."""
     from hawt_core.analyses.modal import modal_analysis
     t = quiet_load("nrel5mw")
-    t = replace(t, gravity=replace(t.gravity, enabled=False))
+    t = replace(t, gravity=replace(t.gravity, enabled=False),
+                drivetrain=replace(t.drivetrain, generator="prescribed"))
     r = modal_analysis(t, rotor_speed=0.0, elements=48, max_per_rev=3.2)
     assert r.standstill and r.to_dict()["modes"][0]["frequency_per_rev"] is None
     got = {}

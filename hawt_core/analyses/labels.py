@@ -13,6 +13,7 @@ import numpy as np
 import scipy.linalg as sl
 
 from ..assembly import TurbineModel
+from ..assembly.turbine import DRIVETRAIN_COORDINATES
 from ..fem.energy import FAMILIES, classify_energy
 from ..results.modes import Mode
 from ..solvers.floquet import dominant_harmonic
@@ -54,7 +55,11 @@ def label_modes(model: TurbineModel, fl, columns) -> list:
         # oscillating at 1/rev may pass through zero at t = 0), as blade-tip metres
         rigid = {nm: R * float(np.sqrt(np.mean(np.abs(fl.periodic_sample(i)[:, pos[lay[nm]]]) ** 2)))
                  if lay[nm] in pos else R * abs(x[lay[nm]])
-                 for nm in ("yaw", "teeter") if nm in lay}
+                 for nm in ("yaw", "teeter") + DRIVETRAIN_COORDINATES if nm in lay}
+        # the drivetrain's two angles name one family (tip metres of the rotor's rotation)
+        drive = [rigid.pop(nm) for nm in DRIVETRAIN_COORDINATES if nm in rigid]
+        if drive:
+            rigid["drivetrain"] = max(drive)
         elastic = 0.0
         energy = np.zeros(6)
         for k in range(nb):
@@ -72,8 +77,13 @@ def label_modes(model: TurbineModel, fl, columns) -> list:
                                                               lay.tower_offset + model.tower.n]).sum())
                         if lay.has_tower else 0.0)
         tower_owns = tower > 0 and (tower >= elastic or tower_energy > float(energy.sum()))
+        # the shaft spring's strain energy (same scale as classify_energy: no 1/2)
+        shaft_energy = (model.rigid.k_shaft * abs(x[lay["shaft_twist"]]) ** 2
+                        if "shaft_twist" in lay else 0.0)
         rig_name = None
-        if tower_owns and tower >= max([0.0] + [0.25 * r for r in rigid.values()]):
+        if shaft_energy > max(float(energy.sum()), tower_energy):
+            rig_name = "drivetrain"
+        elif tower_owns and tower >= max([0.0] + [0.25 * r for r in rigid.values()]):
             # the tower's elastic motion dominates: a tower mode (symmetry = direction). A
             # tower torsion under a free yaw bearing turns the yaw angle (relative to the
             # tower top) as much as the tower twists, and tower bending swings a free yaw and
@@ -83,8 +93,11 @@ def label_modes(model: TurbineModel, fl, columns) -> list:
         elif rigid and max(rigid.values()) >= 3.0 * elastic:
             # the free yaw angle alone is the rigid-body yaw mode; any rigid mode in which the
             # hub teeters appreciably is a teeter mode (the paper's labels)
-            rig_name = "teeter" if rigid.get("teeter", 0.0) >= 0.25 * rigid.get("yaw", 0.0) \
-                else "yaw"
+            if rigid.get("drivetrain", 0.0) >= max(rigid.get("yaw", 0.0), rigid.get("teeter", 0.0)):
+                rig_name = "drivetrain"
+            else:
+                rig_name = ("teeter" if rigid.get("teeter", 0.0) >= 0.25 * rigid.get("yaw", 0.0)
+                            else "yaw")
         if rig_name == "tower":
             family, symmetry, phase = "tower", tower_dir, None
         elif rig_name is not None:
@@ -209,6 +222,9 @@ def _family_rows(model: TurbineModel, family: str, blade: Optional[int] = None):
     R = model.turbine.hub.radius + model.turbine.blade.length
     if family in ("yaw", "teeter"):
         return ([lay[family]], [1.0]) if family in lay else ([], [])
+    if family == "drivetrain":
+        names = [nm for nm in DRIVETRAIN_COORDINATES if nm in lay]
+        return [lay[nm] for nm in names], [1.0] * len(names)
     if family == "tower":
         tl = lay.tower()
         return (list(tl.u[-1]) + list(tl.theta[-1]), [1.0] * 3 + [R] * 3)

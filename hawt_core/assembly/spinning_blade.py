@@ -41,7 +41,7 @@ class SpinningBlade:
         clamped = replace(turbine, rotor=replace(turbine.rotor, speed=self.rotor_speed),
                           hub=replace(turbine.hub, teeter=False, counterweight_mass=0.0),
                           nacelle=replace(turbine.nacelle, yaw_free=False), tower=None,
-                          gravity=replace(turbine.gravity, enabled=False))
+                          gravity=replace(turbine.gravity, enabled=False), drivetrain=None)
         v, w = RigidSystem(clamped).root_motion(np.zeros(0), np.zeros(0), 0.0)
         self.v, self.w = np.real(v[0]).astype(float), np.real(w[0]).astype(float)
         self._jac = ColouredJacobian(block_tridiagonal_pattern(self.beam.pattern_blocks()))

@@ -33,6 +33,9 @@ from .layout import StateLayout
 __all__ = ["TurbineModel"]
 
 
+#: Rigid coordinates of the drivetrain (hawt_core.rigid.kane): labelled "drivetrain".
+DRIVETRAIN_COORDINATES = ("shaft_twist", "generator_azimuth")
+
 class TurbineModel:
     """Rigid nacelle/hub (Kane) + flexible blades (mixed beam elements), one residual.
 
@@ -397,7 +400,7 @@ class TurbineModel:
 
     def display_rows(self):
         """Indices and weights of displacement-like unknowns (units: metres of motion): rigid
-        rotations times the rotor radius; blade displacements; blade bending slopes (theta2,
+        rotations (yaw, teeter, shaft twist, generator azimuth) times the rotor radius; blade displacements; blade bending slopes (theta2,
         theta3) times the blade length (the tip metres they cause); the twist theta1 times the
         sections' torsional radius of gyration sqrt(i1 / m) (the metres its mass moves: a twist
         times the blade length would outweigh a flap deflection by the span-to-chord ratio, and
@@ -409,7 +412,7 @@ class TurbineModel:
         sec = self.turbine.blade.sections
         r_g = float(np.sqrt(np.mean(sec.i1) / np.mean(sec.mass)))
         idx, wts = [], []
-        for name in ("yaw", "teeter"):
+        for name in ("yaw", "teeter") + DRIVETRAIN_COORDINATES:
             if name in lay:
                 idx.append(lay[name]), wts.append(R)
         for k in range(self.n_blades):

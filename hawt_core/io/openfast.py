@@ -41,7 +41,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..model import Beam, Gravity, Hub, Nacelle, Rotor, SectionTable, Turbine
+from ..model import Beam, Drivetrain, Gravity, Hub, Nacelle, Rotor, SectionTable, Turbine
 from .turbine_yaml import TurbineFileError
 
 __all__ = ["ImportResult", "read_openfast", "IMPORTER", "ELEMENTS", "TOWER_STEEL",
@@ -236,7 +236,6 @@ def _main(deck: _Deck):
 
 
 def _check_dofs(deck: _Deck, ed_file: str, nb: int):
-    ed = deck.vt["ElastoDyn"]
     blade = [k for k in ("FlapDOF1", "FlapDOF2", "EdgeDOF") if not deck.flag("ElastoDyn", k)]
     if blade:
         raise TurbineFileError(ed_file, [
@@ -256,14 +255,31 @@ def _check_dofs(deck: _Deck, ed_file: str, nb: int):
         raise TurbineFileError(ed_file, [
             "TwFADOF1, TwFADOF2, TwSSDOF1, TwSSDOF2 = %s: hawt's tower is a beam with all "
             "its modes, or rigid; allowed: all True or all False" % tower])
-    drive = [k for k in ("DrTrDOF", "GenDOF") if deck.flag("ElastoDyn", k)]
-    if drive:
-        deck.warnings.append(
-            f"{Path(ed_file).name}: {', '.join(drive)} = True and GenIner, GBRatio, "
-            "DTTorSpr, DTTorDmp read but not modelled yet: the rotor turns at the prescribed "
-            f"RotSpeed = {ed.get('RotSpeed')} rpm")
     teeter = nb == 2 and deck.flag("ElastoDyn", "TeetDOF")
     return all(tower), teeter
+
+
+def _drivetrain(deck: _Deck, ed_file: Path):
+    """ElastoDyn's DrTrDOF (shaft torsion, DTTorSpr/DTTorDmp) and GenDOF (a free generator,
+    GenIner x GBRatio^2 on the low-speed shaft) -> a hawt Drivetrain (None: both off, the
+    rotor turns at RotSpeed)."""
+    twist = deck.flag("ElastoDyn", "DrTrDOF")
+    free = deck.flag("ElastoDyn", "GenDOF")
+    if not (twist or free):
+        return None
+    ratio = deck.number("ElastoDyn", "GBRatio", rule="> 0")
+    if deck.number("ElastoDyn", "GBoxEff", rule="> 0") != 100.0:
+        deck.warnings.append(f"{ed_file.name}: GBoxEff = {deck.vt['ElastoDyn']['GBoxEff']} "
+                             "read but not modelled (an ideal gearbox)")
+    if free:
+        deck.notes.append("drivetrain: a free generator (GenDOF = True, no generator torque: "
+                          "the controller is not modelled) -- a zero-frequency rotation mode")
+    return Drivetrain(stiffness=deck.number("ElastoDyn", "DTTorSpr", rule="> 0") if twist
+                      else None,
+                      damping=deck.number("ElastoDyn", "DTTorDmp", rule=">= 0") if twist
+                      else 0.0,
+                      generator_inertia=deck.number("ElastoDyn", "GenIner", rule=">= 0"),
+                      gearbox_ratio=ratio, generator="free" if free else "prescribed")
 
 
 def _blade_beamdyn(deck: _Deck, comp: dict, nb: int):
@@ -456,7 +472,7 @@ def _yaw_spring(deck: _Deck, comp: dict) -> tuple:
     deck.notes.append(f"yaw bearing: spring {k:.6g} N m/rad and damper {c:.6g} N m s/rad "
                       "from ServoDyn (YawSpr, YawDamp)")
     deck.warnings.append(f"{sd.name}: the pitch, torque and yaw controllers are not "
-                         "modelled (fixed pitch, prescribed rotor speed)")
+                         "modelled (fixed pitch, no generator torque)")
     return k, c
 
 
@@ -533,6 +549,7 @@ def read_openfast(path) -> ImportResult:
     turbine = Turbine(name=name, rotor=Rotor(speed=rpm * math.pi / 30.0, blades=nb,
                                              precone=math.radians(cones[0])),
                       hub=hub, nacelle=nacelle, blade=blade, tower=tower,
-                      gravity=Gravity(enabled=g > 0, g=g if g > 0 else 9.81))
+                      gravity=Gravity(enabled=g > 0, g=g if g > 0 else 9.81),
+                      drivetrain=_drivetrain(deck, ed_file))
     return ImportResult(turbine=turbine, warnings=deck.warnings, notes=deck.notes,
                         sources=deck.sources)

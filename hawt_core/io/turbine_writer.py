@@ -101,6 +101,14 @@ def dump_turbine(turbine: Turbine, header: str | None = None) -> str:
         "tower": {"rigid": True} if turbine.tower is None else _beam_dict(turbine.tower),
         "gravity": {"enabled": bool(g.enabled), "g": float(g.g)},
     }
+    dt = turbine.drivetrain
+    if dt is not None:
+        data["drivetrain"] = {**({"stiffness": float(dt.stiffness)}
+                                 if dt.stiffness is not None else {}),
+                              "damping": float(dt.damping),
+                              "generator_inertia": float(dt.generator_inertia),
+                              "gearbox_ratio": float(dt.gearbox_ratio),
+                              "generator": str(dt.generator)}
     top = ("# hawt turbine file, written by hawt_core.io.dump_turbine.\n"
            "# SI units (m, kg, s, N), angles in rad, rotor speed in rad/s; "
            "see docs/turbine-format.md.\n")

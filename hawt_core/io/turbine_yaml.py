@@ -30,7 +30,8 @@ from typing import Any, Optional
 import numpy as np
 import yaml
 
-from ..model import Beam, Gravity, Hub, Nacelle, Rotor, SectionTable, Turbine
+from ..model import (GENERATOR_MODES, Beam, Drivetrain, Gravity, Hub, Nacelle, Rotor,
+                     SectionTable, Turbine)
 
 __all__ = [
     "TurbineFileError", "TurbineFileWarning", "load_turbine", "turbine_from_dict",
@@ -121,7 +122,9 @@ def _parse_yaml(text: str, source: str):
 # The schema: for each section, its keys and whether they are required.
 
 _TOP = {"name": False, "rotor": True, "hub": True, "nacelle": True, "blade": True,
-        "tower": False, "gravity": False}
+        "tower": False, "gravity": False, "drivetrain": False}
+_DRIVETRAIN = {"stiffness": False, "damping": False, "generator_inertia": False,
+               "gearbox_ratio": False, "generator": False}
 _ROTOR = {"speed": True, "blades": True, "precone": False}
 _HUB = {"radius": True, "undersling": False, "teeter": True, "inertia_lateral": True,
         "inertia_longitudinal": True, "teeter_stiffness": False, "teeter_damping": False,
@@ -634,6 +637,28 @@ def _build(c: _Checker, data: Any, default_name: str) -> Optional[Turbine]:
             if None not in (enabled, acc):
                 gravity = Gravity(enabled=enabled, g=acc)
 
+    drivetrain = None
+    if data.get("drivetrain") is not None:
+        dt = c.mapping(data["drivetrain"], "drivetrain", _DRIVETRAIN)
+        if dt is not None:
+            n_errors = len(c.errors)
+            gen = dt.get("generator", "prescribed")
+            if gen not in GENERATOR_MODES:
+                c.error("drivetrain.generator", f"must be one of {', '.join(GENERATOR_MODES)}",
+                        gen)
+            parts = dict(stiffness=c.number(dt, "stiffness", "drivetrain", "> 0"),
+                         damping=c.number(dt, "damping", "drivetrain", ">= 0", 0.0),
+                         generator_inertia=c.number(dt, "generator_inertia", "drivetrain",
+                                                    ">= 0", 0.0),
+                         gearbox_ratio=c.number(dt, "gearbox_ratio", "drivetrain", "> 0", 1.0))
+            if len(c.errors) == n_errors:
+                if parts["stiffness"] is None and gen == "prescribed":
+                    c.error("drivetrain", "a rigid shaft (no stiffness) with a prescribed "
+                                          "generator is the default: leave drivetrain out, or "
+                                          "give a stiffness or generator: free")
+                else:
+                    drivetrain = Drivetrain(generator=gen, **parts)
+
     if hub and nacelle and None not in (hub["inertia_lateral"], nacelle["yaw_inertia"]) \
             and nacelle["yaw_inertia"] < hub["inertia_lateral"]:
         c.error("nacelle.yaw_inertia", "must be >= hub.inertia_lateral "
@@ -644,7 +669,7 @@ def _build(c: _Checker, data: Any, default_name: str) -> Optional[Turbine]:
     if c.errors or blade is None or any(p is None or None in p.values() for p in parts):
         return None
     return Turbine(name=name, rotor=Rotor(**rotor), hub=Hub(**hub), nacelle=Nacelle(**nacelle),
-                   blade=blade, tower=tower, gravity=gravity)
+                   blade=blade, tower=tower, gravity=gravity, drivetrain=drivetrain)
 
 
 def turbine_from_dict(d: Mapping, source: str = "<dict>", *, _default_name: str = "unnamed",

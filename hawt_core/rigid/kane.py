@@ -146,13 +146,21 @@ class RigidSystem:
                 "centre; need at least %g (hub share + nacelle mass x offset^2)"
                 % (nac.yaw_inertia, nac.yaw_inertia - i_yaw_cg))
 
-        coords, speeds = [], []
-        if self.yaw_free:
-            coords.append("yaw")
-            speeds.append("yaw_rate")
-        if self.teeter:
-            coords.append("teeter")
-            speeds.append("teeter_speed")
+        dt = getattr(turbine, "drivetrain", None)
+        #: flexible shaft: twist DOF (rotor azimuth - gearbox-input azimuth) with its spring
+        self.shaft_flexible = dt is not None and dt.stiffness is not None
+        #: free generator: the gearbox-input azimuth is a DOF (else it turns at Omega0 t)
+        self.generator_free = dt is not None and dt.generator == "free"
+        self.k_shaft = float(dt.stiffness) if self.shaft_flexible else 0.0
+        self.c_shaft = float(dt.damping) if dt is not None else 0.0
+        #: generator rotor inertia about its axis (high-speed shaft) [kg m^2] and gear ratio
+        self.generator_inertia = float(dt.generator_inertia) if dt is not None else 0.0
+        self.gearbox_ratio = float(dt.gearbox_ratio) if dt is not None else 1.0
+        self.active = (self.yaw_free, self.teeter, self.shaft_flexible, self.generator_free)
+        names = (("yaw", "yaw_rate"), ("teeter", "teeter_speed"),
+                 ("shaft_twist", "shaft_twist_rate"), ("generator_azimuth", "generator_rate"))
+        coords = [c for (c, _), on in zip(names, self.active) if on]
+        speeds = [v for (_, v), on in zip(names, self.active) if on]
         self.coordinates = tuple(coords)
         self.speeds = tuple(speeds)
         self.n_q = len(coords)
@@ -170,45 +178,47 @@ class RigidSystem:
 
     # ------------------------------------------------------------------ helpers
     def _split(self, x, n):
-        """Active entries (..., n) -> (yaw part, teeter part) (...), zeros for removed DOFs."""
+        """Active entries (..., n) -> (yaw, teeter, shaft twist, generator) parts (...),
+        zeros for the DOFs this turbine does not have."""
         x = np.asarray(x)
         if x.ndim == 0 or x.shape[-1] != n:
             raise ValueError(f"expected shape (..., {n}), got {x.shape}")
-        i = 0
-        a = b = np.zeros(x.shape[:-1])
-        if self.yaw_free:
-            a = x[..., i]
-            i += 1
-        if self.teeter:
-            b = x[..., i]
-        return a, b
+        out, i = [], 0
+        for on in self.active:
+            if on:
+                out.append(x[..., i])
+                i += 1
+            else:
+                out.append(np.zeros(x.shape[:-1]))
+        return tuple(out)
 
-    def _join(self, a, b):
-        """(yaw part, teeter part) -> active entries on a last axis."""
-        out = []
-        if self.yaw_free:
-            out.append(a)
-        if self.teeter:
-            out.append(b)
+    def _join(self, *parts):
+        """(yaw, teeter, shaft twist, generator) parts -> active entries on a last axis."""
+        out = [p for p, on in zip(parts, self.active) if on]
         if not out:
-            return np.zeros(np.shape(a) + (0,))
+            return np.zeros(np.shape(parts[0]) + (0,))
         return np.stack(np.broadcast_arrays(*out), -1)
 
-    def azimuth(self, t):
-        """Shaft azimuth psi = Omega0 t (blade 0 up at t = 0)."""
-        return self.omega0 * t
+    def azimuth(self, t, q=None):
+        """Rotor (shaft) azimuth [rad]: ``Omega0 t`` plus the generator's azimuth deviation
+        and the shaft twist when the drivetrain has them (blade 0 up at 0)."""
+        psi = self.omega0 * np.asarray(t)
+        if q is not None and (self.shaft_flexible or self.generator_free):
+            _, _, qd, qg = self._split(q, self.n_q)
+            psi = psi + qd + qg
+        return psi
 
     def frames(self, q, t, tower=None):
         """Basis matrices in N (columns = unit vectors): dict Y, S, H and B (Nb, 3, 3); with a
         flexible tower also T (the tower-top section frame; Y = T rot1(qy))."""
-        qy, qh = self._split(q, self.n_q)
+        qy, qh, _, _ = self._split(q, self.n_q)
         if self.flexible_tower:
             Tt = tip_basis(self._tower_state(tower)[0])
             Y = Tt @ rot1(qy)
         else:
             Tt = None
             Y = rot1(qy)
-        S = (Y @ self._tilt_rotation if self.tilt else Y) @ rot3(self.azimuth(np.asarray(t)))
+        S = (Y @ self._tilt_rotation if self.tilt else Y) @ rot3(self.azimuth(t, q))
         H = S @ rot2(-qh)
         B = H[..., None, :, :] @ self.root_in_hub                       # (..., Nb, 3, 3)
         out = {"Y": Y, "S": S, "H": H, "B": B}
@@ -236,31 +246,39 @@ class RigidSystem:
         return out
 
     def _kin_uncached(self, q, u, t):
-        qy, qh = self._split(q, self.n_q)
-        U1, U2 = self._split(u, self.n_u)
+        qy, qh, qd, qg = self._split(q, self.n_q)
+        U1, U2, U3, U4 = self._split(u, self.n_u)
         fr = self.frames(q, t)
         Y, S, H = fr["Y"], fr["S"], fr["H"]
         y1, s3, h2 = Y[..., :, 0], S[..., :, 2], H[..., :, 1]
-        # batch shapes: scalars (...), vectors (..., 3); U1c, U2c broadcast against vectors
-        U1c, U2c = np.asarray(U1)[..., None], np.asarray(U2)[..., None]
-        w_Y = U1c * y1
+        # batch shapes: scalars (...), vectors (..., 3); Uc (..., 4, 1) against row vectors
+        Uc = np.stack(np.broadcast_arrays(U1, U2, U3, U4), -1)[..., None]
+        z = 0.0 * h2
+        w_Y = Uc[..., 0, :] * y1
         y1h2 = _dot(y1, h2)               # = y1 . s2
-        # partial angular velocities of H (rows: U1, U2) and the remainder, (..., 2, 3)
+        # partial angular velocities (rows: U1 yaw, U2 teeter, U3 shaft twist, U4 generator),
+        # (..., 4, 3): the shaft S spins with both drivetrain speeds, the gearbox input E
+        # with the generator's, the generator rotor G at N times it
+        N = self.gearbox_ratio
         if self.teeter:
-            wr_H = np.stack([y1 - y1h2[..., None] * h2, h2], -2)
+            wr_H = np.stack([y1 - y1h2[..., None] * h2, h2, s3, s3], -2)
         else:
-            wr_H = np.stack([y1, 0.0 * h2], -2)
-        wr_S = np.stack([y1, 0.0 * h2], -2)
-        w_H = wr_H[..., 0, :] * U1c + wr_H[..., 1, :] * U2c + self.omega0 * s3
+            wr_H = np.stack([y1, z, s3, s3], -2)
+        wr_S = np.stack([y1, z, s3, s3], -2)
+        wr_E = np.stack([y1, z, z, s3], -2)
+        wr_G = np.stack([y1, z, z, N * s3], -2)
+        w_H = (wr_H * Uc).sum(-2) + self.omega0 * s3
+        w_G = (wr_G * Uc).sum(-2) + N * self.omega0 * s3
         # partial velocities of SH (teeter-axis point) and of the root points
-        vr_SH = np.stack([self.d * _cross(y1, s3), 0.0 * s3], -2)
-        v_SH = vr_SH[..., 0, :] * U1c
+        vr_SH = np.stack([self.d * _cross(y1, s3), z, z, z], -2)
+        v_SH = vr_SH[..., 0, :] * Uc[..., 0, :]
         rho = np.swapaxes(H @ self.root_offset_hub.T, -1, -2)          # (..., Nb, 3) in N
         vr_P = vr_SH[..., :, None, :] + _cross(wr_H[..., :, None, :],
                                                rho[..., None, :, :])     # (..., 2, Nb, 3)
         v_P = v_SH[..., None, :] + _cross(w_H[..., None, :], rho)
-        return dict(qy=qy, qh=qh, U1=U1, U2=U2, fr=fr, y1=y1, s3=s3, h2=h2, y1h2=y1h2,
-                    w_Y=w_Y, w_H=w_H, wr_H=wr_H, wr_S=wr_S,
+        return dict(qy=qy, qh=qh, qd=qd, U1=U1, U2=U2, U3=U3, U4=U4, Uc=Uc, fr=fr, y1=y1,
+                    s3=s3, h2=h2, y1h2=y1h2, w_Y=w_Y, w_H=w_H, w_G=w_G, wr_H=wr_H,
+                    wr_S=wr_S, wr_E=wr_E, wr_G=wr_G,
                     vr_SH=vr_SH, v_SH=v_SH, vr_P=vr_P, v_P=v_P, rho=rho)
 
     # ------------------------------------------------------------------ flexible tower
@@ -282,9 +300,10 @@ class RigidSystem:
 
     def _kin_tower(self, q, u, t, tower):
         """Flexible-tower kinematics in N: velocities and partial velocities for the speeds
-        z = (U1, U2, V_1..3, Omega_1..3) (removed DOFs included, with zero partials)."""
-        qy, qh = self._split(q, self.n_q)
-        U1, U2 = self._split(u, self.n_u)
+        z = (U1, U2, U3, U4, V_1..3, Omega_1..3) (yaw, teeter, shaft twist, generator, the
+        tower top; removed DOFs included, with zero partials)."""
+        qy, qh, qd, qg = self._split(q, self.n_q)
+        U1, U2, U3, U4 = self._split(u, self.n_u)
         tw = self._tower_state(tower)
         fr = self.frames(q, t, tw)
         Tt, Y, S, H = fr["T"], fr["Y"], fr["S"], fr["H"]
@@ -298,29 +317,37 @@ class RigidSystem:
             wr1, wr2 = y1 - y1h2 * h2, h2
         else:
             wr1, wr2 = y1, z
-        w_H = w_T + wr1 * U1 + wr2 * U2 + self.omega0 * s3
+        N = self.gearbox_ratio
+        w_H = w_T + wr1 * U1 + wr2 * U2 + (self.omega0 + U3 + U4) * s3
+        w_G = w_Y + N * (self.omega0 + U4) * s3
         r_SH = self.shaft_height * y1 + self.d * s3
         r_c = Y @ self.nacelle_cg
         v_SH = v_T + _cross(w_Y, r_SH)
         rho = self.root_offset_hub @ H.T                       # (Nb, 3) in N
         v_P = v_SH[None, :] + _cross(w_H[None, :], rho)
         b = [Tt[:, j] for j in range(3)]                       # tower-top basis in N
-        wr_Y = np.array([y1, z, z, z, z] + b)
-        wr_H = np.array([wr1, wr2, z, z, z] + b)
-        vr_SH = np.array([_cross(y1, r_SH), z] + b + [_cross(bj, r_SH) for bj in b])
-        vr_c = np.array([_cross(y1, r_c), z] + b + [_cross(bj, r_c) for bj in b])
-        vr_P = vr_SH[:, None, :] + _cross(wr_H[:, None, :], rho[None, :, :])   # (8, Nb, 3)
-        vr_T = np.array([z, z] + b + [z, z, z])                # the tower-top point TY
-        return dict(vr_T=vr_T, qy=qy, qh=qh, U1=U1, U2=U2, fr=fr, tw=tw, Tt=Tt, y1=y1, s3=s3, h2=h2,
+        zt = [z, z, z]                                         # no tower-top translation
+        wr_Y = np.array([y1, z, z, z] + zt + b)
+        wr_H = np.array([wr1, wr2, s3, s3] + zt + b)
+        wr_S = np.array([y1, z, s3, s3] + zt + b)
+        wr_E = np.array([y1, z, z, s3] + zt + b)               # gearbox input
+        wr_G = np.array([y1, z, z, N * s3] + zt + b)           # generator rotor
+        vr_SH = np.array([_cross(y1, r_SH), z, z, z] + b + [_cross(bj, r_SH) for bj in b])
+        vr_c = np.array([_cross(y1, r_c), z, z, z] + b + [_cross(bj, r_c) for bj in b])
+        vr_P = vr_SH[:, None, :] + _cross(wr_H[:, None, :], rho[None, :, :])   # (10, Nb, 3)
+        vr_T = np.array([z, z, z, z] + b + zt)                 # the tower-top point TY
+        return dict(vr_T=vr_T, qy=qy, qh=qh, qd=qd, U1=U1, U2=U2, U3=U3, U4=U4, fr=fr, tw=tw,
+                    Tt=Tt, y1=y1, s3=s3, h2=h2, w_G=w_G, wr_S=wr_S, wr_E=wr_E, wr_G=wr_G,
                     y1h2=y1h2, w_T=w_T, v_T=v_T, w_Y=w_Y, w_H=w_H, wr1=wr1, wr2=wr2,
                     r_SH=r_SH, r_c=r_c, v_SH=v_SH, v_P=v_P, rho=rho, wr_Y=wr_Y, wr_H=wr_H,
                     vr_SH=vr_SH, vr_c=vr_c, vr_P=vr_P)
 
     def _kane_tower(self, q, u, udot, t, Fb, Mb, tower):
-        """Kane's F_r + F_r* for z = (U1, U2, V_1..3, Omega_1..3) with a flexible tower."""
+        """Kane's F_r + F_r* for z = (U1, U2, U3, U4, V_1..3, Omega_1..3), flexible tower."""
         k = self._kin_tower(q, u, t, tower)
-        Ud1, Ud2 = self._split(udot, self.n_u)
+        Ud1, Ud2, Ud3, Ud4 = self._split(udot, self.n_u)
         U1, U2, qy, qh = k["U1"], k["U2"], k["qy"], k["qh"]
+        U3, U4 = k["U3"], k["U4"]
         tw, Tt = k["tw"], k["Tt"]
         y1, s3, h2 = k["y1"], k["s3"], k["h2"]
         w_T, v_T, w_Y, w_H = k["w_T"], k["v_T"], k["w_Y"], k["w_H"]
@@ -338,8 +365,8 @@ class RigidSystem:
         else:
             wr1dot = y1dot
             wr2dot = 0.0 * h2
-        alpha_H = (alpha_T + k["wr1"] * Ud1 + k["wr2"] * Ud2 + wr1dot * U1 + wr2dot * U2
-                   + self.omega0 * s3dot)
+        alpha_H = (alpha_T + k["wr1"] * Ud1 + k["wr2"] * Ud2 + (Ud3 + Ud4) * s3
+                   + wr1dot * U1 + wr2dot * U2 + (self.omega0 + U3 + U4) * s3dot)
         r_SH, r_c = k["r_SH"], k["r_c"]
         a_SH = a_T + _cross(alpha_Y, r_SH) + _cross(w_Y, _cross(w_Y, r_SH))
         a_c = a_T + _cross(alpha_Y, r_c) + _cross(w_Y, _cross(w_Y, r_c))
@@ -351,6 +378,10 @@ class RigidSystem:
         Fstar = (k["wr_H"] @ T_H + k["vr_SH"] @ (-self.hub_mass * a_SH)
                  + k["wr_Y"] @ T_Y + k["vr_c"] @ (-self.nacelle_mass * a_c)
                  + k["vr_T"] @ (-self.yaw_bearing_mass * a_T))
+        if self.generator_inertia:
+            N = self.gearbox_ratio
+            alpha_G = alpha_Y + N * Ud4 * s3 + N * (self.omega0 + U4) * s3dot
+            Fstar = Fstar + k["wr_G"] @ self._generator_inertia_torque(alpha_G, k["w_G"], s3)
         if self.counterweight_mass:
             # the counterweight at SH + rho_c (hub-fixed), with its weight
             rho_c = H @ self.counterweight_offset
@@ -367,15 +398,17 @@ class RigidSystem:
         F = F + k["vr_T"] @ (self.yaw_bearing_mass * gN)
         # yaw spring/damper between Y and the tower top: works only through U1
         yaw_t = -self.k_yaw * qy - self.c_yaw * U1
-        F = F + np.concatenate([[yaw_t], [0.0 * U1], np.zeros(6)])
+        F = F + np.concatenate([[yaw_t], np.zeros(9)])
         if self.teeter:
             qhdot = U1 * k["y1h2"] - U2
             tau = (self.k_teeter * qh + self.c_teeter * qhdot) * h2   # on H, reaction on S
-            # S turns relative to Y only by the prescribed azimuth: its partial angular
-            # velocities are Y's
-            F = F + (k["wr_H"] - k["wr_Y"]) @ tau
+            F = F + (k["wr_H"] - k["wr_S"]) @ tau
+        if self.shaft_flexible:
+            # shaft spring and damper on S about s3, reaction on the gearbox input E
+            tau = -(self.k_shaft * k["qd"] + self.c_shaft * U3) * s3
+            F = F + (k["wr_S"] - k["wr_E"]) @ tau
         res = F + Fstar
-        return np.concatenate([self._join(res[0], res[1]), res[2:]])
+        return np.concatenate([self._join(res[0], res[1], res[2], res[3]), res[4:]])
 
     def generalized_forces(self, q, u, udot, t, root_force, root_moment, tower=None):
         """Kane's ``F_r + F_r*`` for every generalized speed: (n_u,) without a flexible tower
@@ -428,13 +461,13 @@ class RigidSystem:
         return -self.g * B[..., 0, :]           # rows of B^T n1
 
     def qdot(self, q, u, t):
-        """Coordinate rates from the speeds: qy' = U1, qh' = U1 (y1 . s2) - U2."""
-        self._split(q, self.n_q)            # shape check only
-        U1, U2 = self._split(u, self.n_u)
-        return self._join(U1, U1 * self._y1s2(t) - U2)
+        """Coordinate rates from the speeds: qy' = U1, qh' = U1 (y1 . s2) - U2, and the
+        drivetrain's shaft twist and generator azimuth rates U3, U4."""
+        U1, U2, U3, U4 = self._split(u, self.n_u)
+        return self._join(U1, U1 * self._y1s2(t, q) - U2, U3, U4)
 
-    def _y1s2(self, t):
-        return -np.sin(self.azimuth(t)) * np.cos(self.tilt)
+    def _y1s2(self, t, q=None):
+        return -np.sin(self.azimuth(t, q)) * np.cos(self.tilt)
 
     def kinematics(self, q, qdot, u, t):
         """Residual of the kinematic ODEs, (n_q,): ``qy' - U1`` and
@@ -456,9 +489,9 @@ class RigidSystem:
                                            tower)[:self.n_u]
         self._check_tower(tower)
         k = self._kin(q, u, t)
-        Ud1, Ud2 = self._split(udot, self.n_u)
-        U1, U2 = k["U1"], k["U2"]
-        qy, qh = k["qy"], k["qh"]
+        Ud1, Ud2, Ud3, Ud4 = self._split(udot, self.n_u)
+        U1, U2, U3, U4 = k["U1"], k["U2"], k["U3"], k["U4"]
+        qy, qh, qd = k["qy"], k["qh"], k["qd"]
         y1, s3, h2, wr_H, w_H, w_Y = k["y1"], k["s3"], k["h2"], k["wr_H"], k["w_H"], k["w_Y"]
         H, B = k["fr"]["H"], k["fr"]["B"]
         Fb = np.asarray(root_force)
@@ -468,7 +501,8 @@ class RigidSystem:
             raise ValueError(f"root loads must have shape (..., {nb}, 3)")
         # scalars broadcast against vectors (batch entries on leading axes)
         U1c, U2c = np.asarray(U1)[..., None], np.asarray(U2)[..., None]
-        Ud1c, Ud2c = np.asarray(Ud1)[..., None], np.asarray(Ud2)[..., None]
+        Udc = np.stack(np.broadcast_arrays(Ud1, Ud2, Ud3, Ud4), -1)[..., None]
+        spin = (np.asarray(U3) + np.asarray(U4))[..., None]        # drivetrain speeds
 
         # --- accelerations
         h2dot = _cross(w_H, h2)
@@ -479,16 +513,22 @@ class RigidSystem:
         else:
             wr1dot = 0.0 * h2
             wr2dot = 0.0 * h2
-        alpha_H = (wr_H[..., 0, :] * Ud1c + wr_H[..., 1, :] * Ud2c + wr1dot * U1c
-                   + wr2dot * U2c + self.omega0 * s3dot)
-        a_SH = self.d * (_cross(y1, s3) * Ud1c + _cross(y1, s3dot) * U1c)
+        alpha_H = ((wr_H * Udc).sum(-2) + wr1dot * U1c + wr2dot * U2c
+                   + (self.omega0 + spin) * s3dot)
+        a_SH = self.d * (_cross(y1, s3) * Udc[..., 0, :] + _cross(y1, s3dot) * U1c)
 
         # --- generalized inertia forces
         I_H = H @ self.hub_inertia @ np.swapaxes(H, -1, -2)
         T_star = -(_mv(I_H, alpha_H) + _cross(w_H, _mv(I_H, w_H)))
         R_star = -self.hub_mass * a_SH
         Fstar = _mv(wr_H, T_star) + _mv(k["vr_SH"], R_star)
-        Fstar = Fstar + self._pair(-self.nacelle_yaw_inertia * Ud1, 0.0 * Ud1)
+        Fstar = Fstar + self._rows(yaw=-self.nacelle_yaw_inertia * Ud1)
+        if self.generator_inertia:
+            N = self.gearbox_ratio
+            alpha_G = ((k["wr_G"] * Udc).sum(-2)
+                       + N * (self.omega0 + np.asarray(U4))[..., None] * s3dot)
+            Fstar = Fstar + _mv(k["wr_G"], self._generator_inertia_torque(alpha_G, k["w_G"],
+                                                                          s3))
         if self.counterweight_mass:
             # the counterweight at SH + rho_c (hub-fixed): v = v_SH + w_H x rho_c
             rho_c = _mv(H, self.counterweight_offset)
@@ -503,18 +543,32 @@ class RigidSystem:
         M_N = _mv(B, Mb)
         F = (k["vr_P"] * F_N[..., None, :, :]).sum((-1, -2)) + _mv(wr_H, M_N.sum(axis=-2))
         F = F + k["vr_SH"][..., 0] * (-self.hub_mass * self.g)
-        F = F + self._pair(-self.k_yaw * qy - self.c_yaw * U1, 0.0 * U1)
+        F = F + self._rows(yaw=-self.k_yaw * qy - self.c_yaw * U1)
         if self.teeter:
             qhdot = U1 * k["y1h2"] - U2
             tau = (self.k_teeter * qh + self.c_teeter * qhdot)[..., None] * h2  # on H
             F = F + _mv(wr_H - k["wr_S"], tau)                                # reaction on S
+        if self.shaft_flexible:
+            # shaft spring and damper on S about s3, reaction on the gearbox input E
+            tau = -(self.k_shaft * qd + self.c_shaft * U3)[..., None] * s3
+            F = F + _mv(k["wr_S"] - k["wr_E"], tau)
         res = F + Fstar
-        return self._join(res[..., 0], res[..., 1])
+        return self._join(*(res[..., r] for r in range(4)))
 
     @staticmethod
-    def _pair(a, b):
-        """(yaw row, teeter row) values -> array (..., 2)."""
-        return np.stack(np.broadcast_arrays(a, b), -1)
+    def _rows(yaw=0.0, teeter=0.0, twist=0.0, generator=0.0):
+        """Values of the (yaw, teeter, shaft twist, generator) rows -> array (..., 4)."""
+        return np.stack(np.broadcast_arrays(yaw, teeter, twist, generator), -1)
+
+    def _generator_inertia_torque(self, alpha, w_G, s3):
+        """Inertia torque ``-(I alpha + omega x I omega)`` of the generator rotor: a body of
+        inertia ``generator_inertia`` about its axis (parallel to s3, the high-speed shaft,
+        spinning at N times the gearbox-input speed) and none across it; ``alpha``, ``w_G``
+        its angular acceleration and velocity, inertial components."""
+        J = self.generator_inertia
+        return -(J * _dot(s3, alpha)[..., None] * s3
+                 + J * _dot(s3, w_G)[..., None] * _cross(w_G, s3))
+
 
     def relabelling_signs(self):
         """Signs (n_q + n_u,) mapping the rigid unknowns under the blade relabelling symmetry
@@ -522,13 +576,15 @@ class RigidSystem:
         k+1 was at ``t`` (root motion, gravity and loads follow the blades; the yaw row is
         unchanged and the teeter row changes sign with S).  Yaw: +1.  Teeter (two blades
         only): -1, since turning the hub by 180 deg about h3 flips qh and U2.  A teetering hub
-        with three or more blades has no such symmetry: ValueError."""
+        with three or more blades has no such symmetry: ValueError.  The drivetrain (shaft
+        twist, generator azimuth) turns with the whole rotor: +1."""
         if self.teeter and self.n_blades != 2:
             raise ValueError("a teetering hub with %d blades has no blade-relabelling symmetry"
                              % self.n_blades)
         if self.counterweight_mass:
             raise ValueError("a hub with a counterweight has no blade-relabelling symmetry")
-        signs = [1.0] * int(self.yaw_free) + [-1.0] * int(self.teeter)
+        signs = [1.0] * int(self.yaw_free) + [-1.0] * int(self.teeter) + [1.0] * (
+            int(self.shaft_flexible) + int(self.generator_free))
         return np.array(signs * 2)
 
     def hub_kinetic_energy(self, q, u, t, tower=None):
@@ -545,7 +601,8 @@ class RigidSystem:
             return (0.5 * (wH @ (I_H @ wH)) + 0.5 * self.hub_mass * (k["v_SH"] @ k["v_SH"])
                     + 0.5 * (wY @ (I_Y @ wY)) + 0.5 * self.nacelle_mass * (v_c @ v_c)
                     + 0.5 * self.yaw_bearing_mass * (k["v_T"] @ k["v_T"])
-                    + 0.5 * self.counterweight_mass * (v_cw @ v_cw))
+                    + 0.5 * self.counterweight_mass * (v_cw @ v_cw)
+                    + 0.5 * self.generator_inertia * (k["s3"] @ k["w_G"]) ** 2)
         self._check_tower(tower)
         k = self._kin(q, u, t)
         H = k["fr"]["H"]
@@ -554,4 +611,5 @@ class RigidSystem:
         v_cw = k["v_SH"] + _cross(w, _mv(H, self.counterweight_offset))
         return (0.5 * _dot(w, _mv(I_H, w)) + 0.5 * self.hub_mass * _dot(k["v_SH"], k["v_SH"])
                 + 0.5 * self.counterweight_mass * _dot(v_cw, v_cw)
-                + 0.5 * self.nacelle_yaw_inertia * k["U1"] ** 2)
+                + 0.5 * self.nacelle_yaw_inertia * k["U1"] ** 2
+                + 0.5 * self.generator_inertia * _dot(k["s3"], k["w_G"]) ** 2)
