@@ -271,9 +271,19 @@ def _drivetrain(deck: _Deck, ed_file: Path):
     if deck.number("ElastoDyn", "GBoxEff", rule="> 0") != 100.0:
         deck.warnings.append(f"{ed_file.name}: GBoxEff = {deck.vt['ElastoDyn']['GBoxEff']} "
                              "read but not modelled (an ideal gearbox)")
-    if free:
-        deck.notes.append("drivetrain: a free generator (GenDOF = True, no generator torque: "
-                          "the controller is not modelled) -- a zero-frequency rotation mode")
+    torque = deck.vt.get("ServoDyn", {}).get("VSContrl") if deck.vt["Fst"].get("CompServo") else 0
+    if free and torque:
+        # the generator torque comes from a controller hawt does not model (yet): a
+        # speed-regulated generator is closer to it than a torque-free one (no steady state
+        # under gravity with a free rotor)
+        free = False
+        deck.warnings.append(
+            f"{ed_file.name}: GenDOF = True with a generator-torque controller (ServoDyn "
+            f"VSContrl = {torque}), which is not modelled: hawt holds the generator at the rotor "
+            "speed (drivetrain.generator: prescribed); the shaft torsion stays a DOF")
+    elif free:
+        deck.notes.append("drivetrain: a free generator (GenDOF = True, no generator torque "
+                          "controller) -- a zero-frequency rotation mode")
     return Drivetrain(stiffness=deck.number("ElastoDyn", "DTTorSpr", rule="> 0") if twist
                       else None,
                       damping=deck.number("ElastoDyn", "DTTorDmp", rule=">= 0") if twist

@@ -12,9 +12,13 @@ class ConvergenceError(RuntimeError):
     """A Newton iteration did not converge."""
 
 
-def newton(fun, jac, y0, tol=1e-9, max_iter=30, what="steady state", fixed=None):
+def newton(fun, jac, y0, tol=1e-9, max_iter=30, what="steady state", fixed=None,
+           linear_solve=None):
     """Newton's method with a sparse LU; ``tol`` is relative to the first residual's scale.
 
+    ``linear_solve(J, r)``: an optional solver of the Newton step ``J dy = r`` (e.g. a
+    preconditioned Krylov method); returning None falls back to the sparse LU, which is
+    also used whenever ``fixed`` is given.
     ``fixed``: indices of unknowns held at their initial values (ignorable coordinates such
     as a free yaw angle, whose columns of the Jacobian vanish, so J is singular): each step
     solves the bordered system ``[[J, B], [P^T, 0]] [dy; mu] = [r; 0]``, ``P`` selecting the
@@ -36,6 +40,11 @@ def newton(fun, jac, y0, tol=1e-9, max_iter=30, what="steady state", fixed=None)
         if np.max(np.abs(r)) <= tol * scale:
             return y, it
         J = sp.csc_matrix(jac(y))
+        dy = linear_solve(J, r) if linear_solve is not None and not k else None
+        if dy is not None:
+            y = y - dy
+            r = fun(y)
+            continue
         if k:
             B = sp.csc_matrix(Bcols * (abs(J).max() / np.sqrt(n)))
             J = sp.bmat([[J, B], [P.T, None]], format="csc")
