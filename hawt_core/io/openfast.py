@@ -280,10 +280,12 @@ def _drivetrain(deck: _Deck, ed_file: Path):
         deck.warnings.append(
             f"{ed_file.name}: GenDOF = True with a generator-torque controller (ServoDyn "
             f"VSContrl = {torque}), which is not modelled: hawt holds the generator at the rotor "
-            "speed (drivetrain.generator: prescribed); the shaft torsion stays a DOF")
+            "speed (drivetrain.generator: prescribed)")
     elif free:
         deck.notes.append("drivetrain: a free generator (GenDOF = True, no generator torque "
                           "controller) -- a zero-frequency rotation mode")
+    if not (twist or free):
+        return None                          # a rigid shaft at the held speed: the default
     return Drivetrain(stiffness=deck.number("ElastoDyn", "DTTorSpr", rule="> 0") if twist
                       else None,
                       damping=deck.number("ElastoDyn", "DTTorDmp", rule=">= 0") if twist
