@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from .parser import (command, elements_arg, finite_float, load, marching_args, model_args,
+                     with_accuracy,
                      per_rev, positive_int, speeds_type, turbine_arg)
 from .status import ProgressLine
 
@@ -15,8 +16,8 @@ from .status import ProgressLine
 def cmd_blade_modes(args) -> int:
     from ..analyses.blade_modes import blade_modes
     turbine = load(args.turbine)
-    result = blade_modes(turbine, elements=args.elements, rotor_speed=args.rotor_speed,
-                         count=args.count, method=args.method)
+    result = with_accuracy(args, turbine, lambda t, n: blade_modes(
+        t, elements=n, rotor_speed=args.rotor_speed, count=args.count, method=args.method))
     result.settings["turbine_file"] = args.turbine
     if args.plot:
         result.plot(args.plot)
@@ -53,9 +54,10 @@ def cmd_modes(args) -> int:
     turbine = load(args.turbine)
     status = ProgressLine(not args.json)
     try:
-        result = modal_analysis(turbine, elements=args.elements, rotor_speed=args.rotor_speed,
-                                steps=args.steps, method=args.method,
-                                max_per_rev=args.max_per_rev, progress=status)
+        result = with_accuracy(args, turbine, lambda t, n: modal_analysis(
+            t, elements=n, rotor_speed=args.rotor_speed, steps=args.steps,
+            method=args.method, max_per_rev=args.max_per_rev, progress=status),
+            progress=lambda msg: status(0.0, msg))
     finally:
         status.close()
     result.settings["turbine_file"] = args.turbine

@@ -9,7 +9,7 @@ import argparse
 import math
 from typing import Callable, Optional
 
-__all__ = ['EXIT_USAGE', 'CliError', 'Parser', 'COMMANDS', 'command', 'positive_int', 'finite_float', 'turbine_arg', 'elements_arg', 'model_args', 'load', 'steps_type', 'per_rev', 'marching_args', 'speeds_type']
+__all__ = ['EXIT_USAGE', 'CliError', 'Parser', 'COMMANDS', 'command', 'positive_int', 'finite_float', 'turbine_arg', 'elements_arg', 'model_args', 'load', 'accuracy_type', 'refined_runner', 'with_accuracy', 'steps_type', 'per_rev', 'marching_args', 'speeds_type']
 
 
 EXIT_USAGE = 2
@@ -87,12 +87,55 @@ def elements_arg(p):
                    help="finite elements per blade (default: the turbine file's)")
 
 
+def accuracy_type(text: str) -> float:
+    v = finite_float("", unit="relative")(text)
+    if not 1e-6 <= v < 0.5:
+        raise argparse.ArgumentTypeError(f"{text!r} is not allowed; need a relative error from "
+                                         "1e-6 to 0.5, e.g. 1e-3")
+    return v
+
+
 def model_args(p):
     """The arguments every analysis takes: the turbine file and the usual overrides."""
     turbine_arg(p)
     elements_arg(p)
     p.add_argument("--rotor-speed", type=_rotor_speed, default=None, metavar="RAD_PER_S",
                    help="rotor speed [rad/s] (default: the turbine file's)")
+    p.add_argument("--accuracy", type=accuracy_type, default=None, metavar="TOL",
+                   help="choose the mesh: raise the elements per blade (from --elements or "
+                        "the file's) until every frequency's estimated discretization error "
+                        "(Richardson, second order) is below TOL, e.g. 1e-3")
+    p.add_argument("--error-estimate", action="store_true",
+                   help="also run half the elements and report each frequency's estimated "
+                        "discretization error")
+
+
+def refined_runner(turbine, n0: int, analysis):
+    """``run(n)``: ``analysis(turbine', n)`` with a flexible tower's elements scaled like
+    the blades' (n / n0, at least its own count's share)."""
+    from dataclasses import replace
+    import math
+
+    def run(n):
+        t = turbine
+        if t.tower is not None:
+            t = replace(t, tower=replace(t.tower, elements=max(
+                1, int(math.ceil(t.tower.elements * n / n0)))))
+        return analysis(t, n)
+    return run
+
+
+def with_accuracy(args, turbine, analysis, progress=None):
+    """The analysis at the requested mesh, with error estimates (--error-estimate) or at the
+    mesh --accuracy chooses (hawt_core.analyses.accuracy)."""
+    from ..analyses.accuracy import converge, with_error_estimates
+    n0 = int(args.elements or turbine.blade.elements)
+    run = refined_runner(turbine, n0, analysis)
+    if args.accuracy is not None:
+        return converge(run, n0, args.accuracy, progress)
+    if args.error_estimate:
+        return with_error_estimates(run, n0)
+    return run(n0)
 
 
 def load(path):

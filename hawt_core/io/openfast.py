@@ -57,8 +57,10 @@ def _version(dist: str) -> str:
 #: Importer name and version written into the header of converted files.
 IMPORTER = f"hawt {_version('hawt')} OpenFAST importer (openfast-io {_version('openfast-io')})"
 
-#: Finite elements of the imported blade and tower (hawt files must name them).
-ELEMENTS = {"blade": 24, "tower": 12}
+#: Finite elements of the imported blade and tower (hawt files must name them): 64 per
+#: blade put the NREL 5-MW blade's first five frequencies within 0.1 % of converged (the
+#: Richardson estimates of ``--error-estimate``: 0.08 % flap 1, 0.05 % edge 1).
+ELEMENTS = {"blade": 64, "tower": 16}
 
 #: Steel-tube assumptions for what an ElastoDyn tower file lacks (torsional rigidity and
 #: section rotary inertia): G/E of steel and E / rho [m^2/s^2] with ElastoDyn's effective

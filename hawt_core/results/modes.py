@@ -46,6 +46,9 @@ class Mode:
     fixed_frame_damping_ratio: Optional[float] = None
     whirl: Optional[str] = None
     cyclic_order: Optional[int] = None
+    #: estimated relative discretization error of the frequency (hawt_core.analyses.accuracy;
+    #: converged minus reported, over reported), None when not estimated
+    frequency_error: Optional[float] = None
     participation: dict = field(default_factory=dict, repr=False)
     column: int = field(default=-1, repr=False)
 
@@ -62,7 +65,8 @@ class Mode:
                 "fixed_frame_per_rev": self.fixed_frame_per_rev,
                 "fixed_frame_hz": self.fixed_frame_hz,
                 "fixed_frame_damping_ratio": self.fixed_frame_damping_ratio,
-                "whirl": self.whirl, "cyclic_order": self.cyclic_order}
+                "whirl": self.whirl, "cyclic_order": self.cyclic_order,
+                "frequency_error": self.frequency_error}
 
 
 @dataclass
@@ -124,6 +128,11 @@ class ModalResult:
                 unit = "Hz" if self.standstill else "per-rev"
                 footer.append(f"({self.unresolved} modes above {s['resolution_per_rev']:g} "
                               f"{unit} not shown: raise --max-per-rev)")
+        est = s.get("error_estimate")
+        if est:
+            footer.append(f"estimated errors: Richardson from {est['elements'][0]} and "
+                          f"{est['elements'][1]} elements per blade (converged - reported, "
+                          "relative)")
         footer.append(f"computed in {self.compute_time:.2f} s")
         return format_table(header, self.modes, footer,
                             unit="Hz" if self.standstill else "per-rev")
@@ -162,6 +171,8 @@ class BladeMode:
     damping_ratio: float
     eigenvalue: complex
     shape: dict = field(repr=False)
+    #: estimated relative discretization error of the frequency, None when not estimated
+    frequency_error: Optional[float] = None
 
     @property
     def frequency_rad_s(self) -> float:
@@ -171,7 +182,8 @@ class BladeMode:
         return {"family": self.family, "index": self.index,
                 "frequency_per_rev": _json_number(self.frequency_per_rev),
                 "frequency_hz": _json_number(self.frequency_hz),
-                "damping_ratio": _json_number(self.damping_ratio), "shape": self.shape}
+                "damping_ratio": _json_number(self.damping_ratio),
+                "frequency_error": self.frequency_error, "shape": self.shape}
 
 
 @dataclass
@@ -197,18 +209,33 @@ class BladeModesResult:
     def table(self) -> str:
         lines = [f"Blade modes, clamped on the hub at {self.rotor_speed:.4g} rad/s, "
                  f"{self.elements} elements ({self.settings.get('method', '')})",
-                 f"{'mode':<16}{'per-rev':>12}{'Hz':>12}{'damping':>12}"]
+                 f"{'mode':<16}{'per-rev':>12}{'Hz':>12}{'damping':>12}"
+                 + (f"{'est. error':>12}" if self.estimated else "")]
         for m in self.modes:
             pr = (f"{m.frequency_per_rev:>12.5f}" if np.isfinite(m.frequency_per_rev)
                   else f"{'-':>12}")
             lines.append(f"{m.family + ' ' + str(m.index):<16}{pr}"
-                         f"{m.frequency_hz:>12.5f}{m.damping_ratio:>12.2e}")
+                         f"{m.frequency_hz:>12.5f}{m.damping_ratio:>12.2e}"
+                         + (error_text(m.frequency_error) if self.estimated else ""))
+        est = self.settings.get("error_estimate")
+        if est:
+            lines.append(f"estimated errors: Richardson from {est['elements'][0]} and "
+                         f"{est['elements'][1]} elements (converged - reported, relative)")
         return "\n".join(lines)
+
+    @property
+    def estimated(self) -> bool:
+        return bool(self.settings.get("error_estimate"))
 
     def plot(self, path, count: int = 6):
         """Mode shapes (flap u3, lead-lag u2, twist theta1 along the span) to a PNG file."""
         from .plotting import plot_blade_modes
         return plot_blade_modes(self, path, count=count)
+
+
+def error_text(e) -> str:
+    """An estimated relative error as a 12-wide table cell ('-' when not estimated)."""
+    return f"{e:>+12.1e}" if e is not None else f"{'-':>12}"
 
 
 def mode_shape(beam: BeamElements, x: np.ndarray) -> dict:

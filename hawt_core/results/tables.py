@@ -36,6 +36,13 @@ def _fixed(m):
     return None if not getattr(m, "whirl", None) or f is None or not np.isfinite(f) else f
 
 
+def _error(m, shown: bool) -> str:
+    if not shown:
+        return ""
+    e = getattr(m, "frequency_error", None)
+    return f"{e:>+12.1e}" if e is not None else f"{'-':>12}"
+
+
 def format_table(header: str, modes, footer=(), unit: str = "per-rev") -> str:
     """The modes as a table like the paper's Table 2. ``modes``: objects with the attributes
     family, symmetry, index, frequency_per_rev, real_per_rev, frequency_hz, damping_ratio
@@ -44,11 +51,15 @@ def format_table(header: str, modes, footer=(), unit: str = "per-rev") -> str:
     rotating-frame dominant frequency beside them.  ``unit``: of the eigenvalue column
     ("Hz" for a standing rotor, whose eigenvalues are given divided by 2 pi)."""
     fixed = bool(modes) and all(_fixed(m) is not None for m in modes)
+    # estimated discretization errors (hawt_core.analyses.accuracy), when there are any
+    est = any(getattr(m, "frequency_error", None) is not None for m in modes)
+    extra = f"{'est. error':>12}" if est else ""
     if fixed:
         lines = [header, f"{'mode':<30}{'fixed-frame eigenvalue (per-rev)':>34}{'Hz':>11}"
-                         f"{'damping':>11}{'rotating':>11}"]
+                         f"{'damping':>11}{'rotating':>11}" + extra]
     else:
-        lines = [header, f"{'mode':<30}{f'eigenvalue ({unit})':>28}{'Hz':>11}{'damping':>11}"]
+        lines = [header, f"{'mode':<30}{f'eigenvalue ({unit})':>28}{'Hz':>11}{'damping':>11}"
+                 + extra]
     for m in modes:
         name = mode_name(m)
         if fixed:
@@ -56,9 +67,9 @@ def format_table(header: str, modes, footer=(), unit: str = "per-rev") -> str:
             zeta = m.fixed_frame_damping_ratio
             damping = f"{zeta:>11.2e}" if np.isfinite(zeta) else f"{'-':>11}"
             lines.append(f"{name:<30}{ev:>34}{m.fixed_frame_hz:>11.5f}{damping}"
-                         f"{m.frequency_per_rev:>11.5f}")
+                         f"{m.frequency_per_rev:>11.5f}" + _error(m, est))
             continue
         ev = _eigenvalue_text(m.frequency_per_rev, m.real_per_rev)
         damping = f"{m.damping_ratio:>11.2e}" if np.isfinite(m.damping_ratio) else f"{'-':>11}"
-        lines.append(f"{name:<30}{ev:>28}{m.frequency_hz:>11.5f}{damping}")
+        lines.append(f"{name:<30}{ev:>28}{m.frequency_hz:>11.5f}{damping}" + _error(m, est))
     return "\n".join(lines + list(footer))
