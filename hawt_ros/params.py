@@ -42,7 +42,8 @@ class ParameterError(ValueError):
 #: every parameter with dynamic typing so that ``-p step_deg:=1`` (an integer) is accepted
 #: where a float is expected).
 PARAMETERS: Dict[str, Tuple[Any, str]] = {
-    "turbine": ("", "turbine YAML file; '' = the shipped default (the paper's Table 1)"),
+    "turbine": ("", "turbine YAML file, OpenFAST deck (.fst) or shipped name (hawt turbines); "
+                    "'' = the shipped default (the paper's Table 1)"),
     "elements": (0, "beam elements per blade; 0 = the turbine file's value"),
     "step_deg": (5.0, "simulation time step as rotor azimuth increment [deg], > 0 and <= 30"),
     "publish_rate": (20.0, "publishing rate [Hz] (of simulation time when real_time_factor = 0)"),
@@ -115,7 +116,8 @@ def validate_parameter(name: str, value: Any) -> Any:
         if value is None:
             return ""
         if not isinstance(value, str):
-            raise ParameterError(name, value, "need a file path (string); '' = the default turbine")
+            raise ParameterError(name, value, "need a file path or a shipped turbine's name "
+                                              "(string); '' = the default turbine")
         return value.strip()
     if name == "elements":
         allowed = f"need an integer from 1 to {MAX_ELEMENTS}, or 0 = the turbine file's value"

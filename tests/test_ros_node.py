@@ -709,7 +709,9 @@ def test_bad_parameters_exit_with_clear_errors(ros_env, tmp_path):
     cases = [({"step_deg": -1.0}, ["step_deg", "-1.0", "not allowed", "> 0"]),
              ({"elements": "abc"}, ["elements", "'abc'", "integer"]),
              ({"perturb": "spin=1"}, ["perturb", "spin", "teeter"]),
-             ({"turbine": str(tmp_path / "missing.yaml")}, ["turbine", "missing.yaml"])]
+             ({"turbine": str(tmp_path / "missing.yaml")}, ["turbine", "missing.yaml"]),
+             # a name that is neither a file nor a shipped turbine: the shipped ones listed
+             ({"turbine": "nrel7mw"}, ["turbine", "nrel7mw", "nrel5mw", "hawt turbines"])]
     procs = [(NodeProcess(tmp_path, p, domain_id()), words) for p, words in cases]
     for node, words in procs:
         try:

@@ -69,6 +69,9 @@ DEFAULT_MAX_PER_REV = 50.0
 #: 0): there is no revolution, and with T = 1 s the machinery's "per-rev" numbers are Hz.
 STANDSTILL_PERIOD = 1.0
 
+#: Default band [Hz] of the analysis of a standing rotor.
+STANDSTILL_MAX_HZ = 10.0
+
 #: Relative residual above which the blade-relabelling symmetry is taken not to hold.
 SYMMETRY_TOL = 1e-8
 
@@ -374,7 +377,8 @@ def _modal_analysis(turbine, elements, rotor_speed, steps, method, fast, harmoni
         fl, modes, unresolved, limit = _monodromy_modes(model, dae, method, steps, use_fast,
                                                         rows, wts, d)
     else:
-        limit = float(max_per_rev) if max_per_rev is not None else DEFAULT_MAX_PER_REV
+        limit = (float(max_per_rev) if max_per_rev is not None
+                 else STANDSTILL_MAX_HZ if standstill else DEFAULT_MAX_PER_REV)
         frame = "multi-blade" if mbc is not None else ("fixed" if standstill else "rotating")
         stage(0.3, f"Hill's method ({frame} frame, modes below {limit:g} per-rev)")
         fl, hm = _hill_floquet(model, mbc if mbc is not None else dae,

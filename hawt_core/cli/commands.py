@@ -82,7 +82,7 @@ def _modes_args(p):
     p.add_argument("--max-per-rev", type=per_rev, default=None, metavar="F",
                    help="band of Hill's method and multi-blade coordinates: modes below F "
                         "per-rev (default 50); with --rotor-speed 0 (a standing rotor) F is "
-                        "in Hz")
+                        "in Hz (default 10)")
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
     p.add_argument("--plots", metavar="DIR", default=None,
                    help="write mode-shape pictures (PNG) into this folder")

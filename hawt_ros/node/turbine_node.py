@@ -73,11 +73,12 @@ class HawtNode(Pacing, StatePublisher, Recording, AnalysisServer, Node):
 
         # ---------------------------------------------------------------- model
         from hawt_core.assembly import TurbineModel
-        from hawt_core.io import TurbineFileError, load_turbine
+        from hawt_core.io import TurbineFileError
+        from hawt_core.io.catalog import SHIPPED, load_any, shipped_path
 
         path = self.settings.turbine or None
         try:
-            self.turbine = load_turbine(path)
+            self.turbine = load_any(path)
         except TurbineFileError as exc:
             raise StartupError(f"parameter turbine: {path!r}: {exc}") from None
         except OSError as exc:
@@ -85,6 +86,8 @@ class HawtNode(Pacing, StatePublisher, Recording, AnalysisServer, Node):
         if path is None:
             from hawt_core.io import default_turbine_path
             self.turbine_path = str(default_turbine_path())
+        elif path in SHIPPED and not Path(path).exists():
+            self.turbine_path = str(shipped_path(path))
         else:
             self.turbine_path = str(Path(path).resolve())
         try:
