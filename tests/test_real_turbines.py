@@ -342,3 +342,13 @@ def test_nrel5mw_full_system_at_rest_within_the_spread_of_fast_and_adams():
     g = modal_analysis(quiet_load("nrel5mw"), rotor_speed=0.0, elements=48, max_per_rev=0.5)
     fa = [m.frequency_hz for m in g.modes if m.symmetry == "fore-aft"][0]
     assert fa < 0.3150
+
+
+@needs_decks
+def test_a_value_the_reader_cannot_convert_is_named_with_its_key_and_line(tmp_path):
+    from hawt_core.io.openfast import read_openfast
+    d = _deck_copy(tmp_path)
+    line = _edit(d / "NRELOffshrBsline5MW_Onshore_ElastoDyn.dat", "NumBl", "three")
+    with pytest.raises(TurbineFileError) as e:
+        read_openfast(d / "NREL-5MW.fst")
+    assert f"NumBl = 'three' (line {line})" in str(e.value)

@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 from importlib import metadata
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -152,15 +153,21 @@ class _Deck:
 
     def read(self, what: str, path: Path, call):
         """Run one openfast-io reader; any failure -> TurbineFileError naming the file (and
-        the first key whose value is not a number, when that is why)."""
+        the key and line holding the text it could not convert, when that is why)."""
         self.sources[what] = str(path)
         try:
             call()
         except Exception as exc:                      # openfast-io raises whatever it meets
-            self.keys[what] = _keyed_lines(path)
+            keys = _keyed_lines(path)
+            # the text openfast-io could not convert, and the key whose value it is
+            bad = re.findall(r"'([^']*)'", str(exc))
+            where = [f"{k} = {v!r} (line {i})" for k, (i, v) in keys.items()
+                     if bad and v == bad[-1]]
             raise TurbineFileError(str(path), [
                 f"cannot be read as an OpenFAST {what} file by openfast-io "
-                f"({type(exc).__name__}: {exc}); check it against the {what} input format"])
+                f"({type(exc).__name__}: {exc})"
+                + (f" at {where[0]}" if where else "")
+                + f"; check it against the {what} input format"])
         self.keys[what] = _keyed_lines(path)
 
     def number(self, module: str, key: str, *, rule: str = "finite", allowed: str = "",
