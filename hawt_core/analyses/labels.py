@@ -73,9 +73,10 @@ def label_modes(model: TurbineModel, fl, columns) -> list:
         # strain energy in the tower against that in the blades: a tower mode of a large
         # rotor drags long, soft blades along (their tips flap more than the tower top moves)
         # while the tower holds most of the strain energy
-        tower_energy = (float(classify_energy(model.tower, x[lay.tower_offset:
-                                                              lay.tower_offset + model.tower.n]).sum())
-                        if lay.has_tower else 0.0)
+        tower_energy = 0.0
+        if lay.has_tower:
+            t0 = lay.tower_offset
+            tower_energy = float(classify_energy(model.tower, x[t0:t0 + model.tower.n]).sum())
         tower_owns = tower > 0 and (tower >= elastic or tower_energy > float(energy.sum()))
         # the shaft spring's strain energy (same scale as classify_energy: no 1/2)
         shaft_energy = (model.rigid.k_shaft * abs(x[lay["shaft_twist"]]) ** 2
