@@ -138,14 +138,27 @@ class _ShiftInvert:
     def nearest(self, k: int):
         """(lam, X) of the k eigenvalues nearest sigma (infinite ones excluded)."""
         N = self.N
-        try:
-            mu, X = spla.eigs(self.op, k=k, which="LM", ncv=min(N - 1, max(2 * k + 1, 40)),
-                              tol=1e-13)
-        except spla.ArpackNoConvergence as err:
-            mu, X = err.eigenvalues, err.eigenvectors
-            if len(mu) < k // 2:
-                raise HillError(f"{self.what}: ARPACK did not converge for the {k} "
-                                f"eigenvalues nearest {self.sigma:.4g}") from err
+        ncv = min(N - 1, max(2 * k + 1, 40))
+        for attempt in range(3):
+            # ARPACK starts from a random vector; LAPACK's Schur reordering inside it can
+            # fail for some starts (widely spread eigenvalues): retry from fixed ones
+            v0 = None if attempt == 0 else np.random.default_rng(attempt).standard_normal(N)
+            if v0 is not None and self.op.dtype == complex:
+                v0 = v0 + 1j * np.random.default_rng(10 + attempt).standard_normal(N)
+            try:
+                mu, X = spla.eigs(self.op, k=k, which="LM", ncv=min(N - 1, ncv + 10 * attempt),
+                                  tol=1e-13, v0=v0)
+                break
+            except spla.ArpackNoConvergence as err:
+                mu, X = err.eigenvalues, err.eigenvectors
+                if len(mu) < k // 2:
+                    raise HillError(f"{self.what}: ARPACK did not converge for the {k} "
+                                    f"eigenvalues nearest {self.sigma:.4g}") from err
+                break
+            except spla.ArpackError as err:
+                if attempt == 2:
+                    raise HillError(f"{self.what}: ARPACK failed for the {k} eigenvalues "
+                                    f"nearest {self.sigma:.4g}: {err}") from err
         ok = np.abs(mu) > 0
         return self.sigma + 1.0 / mu[ok], X[:, ok]
 
