@@ -38,7 +38,10 @@ class SimulationOutputs:
         teeter_rate (= d teeter/dt) [rad/s]; locked DOFs report 0."""
         qd = self._rates()
         y = self.y
-        az = (self.omega * self.t) % (2 * math.pi)
+        m = self.model
+        # the rotor's azimuth: Omega0 t, plus the drivetrain's twist and generator angle
+        psi = m.rigid.azimuth(self.t, y[:m.nq]) if m.nq else self.omega * self.t
+        az = float(np.real(psi)) % (2 * math.pi)
         out = {"time": self.t, "azimuth": az, "yaw": 0.0, "yaw_rate": 0.0,
                "teeter": 0.0, "teeter_rate": 0.0}
         if self._iy is not None:
