@@ -88,4 +88,22 @@ def load_any(spec=None) -> Turbine:
         return result.turbine
     if not p.exists() and "/" not in text and not p.suffix:
         shipped_path(text)                 # raises with the list of shipped names
+    if p.suffix.lower() in (".yaml", ".yml") and _is_windio(p):
+        raise TurbineFileError(str(p), [
+            "a WindIO turbine file (windIO_version / assembly / components): hawt does not "
+            "read WindIO yet; use the turbine's OpenFAST deck (hawt import openfast) or a "
+            "hawt turbine file"])
     return load_turbine(p)
+
+
+def _is_windio(p: Path) -> bool:
+    """True when the top-level keys of a YAML file (a cheap look at its first 64 kB) are
+    WindIO's."""
+    try:
+        with open(p, encoding="utf-8", errors="replace") as f:
+            head = f.read(65536)
+    except OSError:
+        return False
+    keys = {line.split(":", 1)[0] for line in head.splitlines()
+            if line and not line[0].isspace() and ":" in line and not line.startswith("#")}
+    return "windIO_version" in keys or {"assembly", "components"} <= keys
