@@ -19,10 +19,10 @@ def cmd_turbines(args) -> int:
         import json
         print(json.dumps(rows, indent=1))
         return 0
-    print(f"{'name':12s} {'blades':>6s} {'radius m':>9s} {'rpm':>6s}  {'tower':18s} description")
+    print(f"{'name':12s} {'blades':>6s} {'radius m':>9s} {'rpm':>6s}  {'tower':20s} description")
     for r in rows:
         print(f"{r['name']:12s} {r['blades']:6d} {r['rotor_radius_m']:9.2f} "
-              f"{r['rotor_speed'] * 30 / 3.141592653589793:6.2f}  {r['tower']:18s} "
+              f"{r['rotor_speed'] * 30 / 3.141592653589793:6.2f}  {r['tower']:20s} "
               f"{r['description']}")
     return 0
 
