@@ -24,10 +24,25 @@ from __future__ import annotations
 import math
 from typing import Callable, Optional
 
-__all__ = ["richardson", "with_error_estimates", "converge", "MAX_ELEMENTS_CHOSEN"]
+__all__ = ["richardson", "with_error_estimates", "converge", "check_accuracy",
+           "MAX_ELEMENTS_CHOSEN", "ACCURACY_RANGE"]
 
 #: Largest mesh ``converge`` goes to (elements per blade).
 MAX_ELEMENTS_CHOSEN = 256
+
+#: Accepted relative accuracies: from ACCURACY_RANGE[0] up to (not including) [1].
+ACCURACY_RANGE = (1e-6, 0.5)
+
+
+def check_accuracy(tol) -> float:
+    """A requested relative accuracy, or ValueError naming it and the allowed range (the one
+    check the API and the command line share)."""
+    lo, hi = ACCURACY_RANGE
+    ok = isinstance(tol, (int, float)) and not isinstance(tol, bool) and lo <= tol < hi
+    if not ok:
+        raise ValueError(f"accuracy: {tol!r} is not allowed; need a relative error from "
+                         f"{lo:g} to {hi:g}, e.g. 1e-3")
+    return float(tol)
 
 
 def richardson(f_coarse: float, f_fine: float, n_coarse: int, n_fine: int) -> float:
@@ -74,10 +89,8 @@ def converge(run: Callable[[int], object], n0: int, tol: float,
              progress: Optional[Callable[[str], None]] = None):
     """The result of ``run(N)`` with N raised from ``n0`` until every matched frequency's
     estimated relative error is <= ``tol``; ValueError if it would exceed
-    MAX_ELEMENTS_CHOSEN."""
-    if not (isinstance(tol, (int, float)) and 0 < tol < 1):
-        raise ValueError(f"accuracy: {tol!r} is not allowed; need a relative error between 0 "
-                         "and 1, e.g. 1e-3")
+    MAX_ELEMENTS_CHOSEN, and ValueError for a ``tol`` outside ACCURACY_RANGE."""
+    tol = check_accuracy(tol)
     n_prev = max(1, int(n0) // 2)
     prev = run(n_prev)
     n = max(n_prev + 1, int(n0))

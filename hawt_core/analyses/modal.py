@@ -43,7 +43,8 @@ from ..results.modes import ModalResult
 from ..solvers.floquet import LinearPeriodicDAE, floquet_analysis, periodic_modes
 from ..solvers.hill import hill_modes
 from ..solvers.multiblade import MultiBladeTransform
-from ..solvers.periodic import periodic_steady_state
+from ..solvers.periodic import PeriodicSteadyState, periodic_steady_state
+from ..solvers.steady import constant_steady_state
 from .labels import (add_fixed_frame, exponent_fields, family_exponent, label_modes,
                      number_modes, separate_degenerate_modes)
 
@@ -171,8 +172,6 @@ def periodic_dae(model: TurbineModel, steady, check_symmetry: bool = True) -> Li
 def _standstill_dae(model: TurbineModel):
     """The static equilibrium of a standing rotor (gravity included) and its linearization as
     a constant-coefficient DAE with the nominal period STANDSTILL_PERIOD."""
-    from ..solvers.periodic import PeriodicSteadyState
-    from ..solvers.steady import constant_steady_state
     y = constant_steady_state(model)
     steady = PeriodicSteadyState(times=np.array([0.0]), states=y[None],
                                  period=STANDSTILL_PERIOD, iterations=0, constant=True)

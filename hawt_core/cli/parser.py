@@ -88,11 +88,15 @@ def elements_arg(p):
 
 
 def accuracy_type(text: str) -> float:
+    """argparse type of --accuracy: hawt_core.analyses.accuracy's own check."""
+    from ..analyses.accuracy import ACCURACY_RANGE, check_accuracy
     v = finite_float("", unit="relative")(text)
-    if not 1e-6 <= v < 0.5:
+    try:
+        return check_accuracy(v)
+    except ValueError:
+        lo, hi = ACCURACY_RANGE
         raise argparse.ArgumentTypeError(f"{text!r} is not allowed; need a relative error from "
-                                         "1e-6 to 0.5, e.g. 1e-3")
-    return v
+                                         f"{lo:g} to {hi:g}, e.g. 1e-3") from None
 
 
 def model_args(p):

@@ -69,6 +69,9 @@ ELEMENTS = {"blade": 64, "tower": 16}
 #: rotary inertia per length about a diameter is rho I = rho EI / E.
 TOWER_STEEL = {"G_over_E": 80.8 / 210.0, "E_over_rho": 210e9 / 8500.0}
 
+#: Role of the deck's main file (.fst) in ``ImportResult.sources`` and the messages.
+MAIN = "OpenFAST main"
+
 #: BeamDyn section components (x, y, z) -> hawt blade frame (b1, b2, b3): rows are hawt axes.
 BEAMDYN_TO_HAWT = np.array([[0.0, 0.0, 1.0], [0.0, -1.0, 0.0], [1.0, 0.0, 0.0]])
 
@@ -88,7 +91,7 @@ class ImportResult:
 
     def header(self) -> str:
         """Provenance lines for a converted file's header comment."""
-        fst = Path(self.sources.get("fst", "?"))
+        fst = Path(self.sources.get(MAIN, "?"))
         shown = str(fst)
         if "site-packages" in fst.parts:           # a deck from an installed wheel (rosco)
             rel = fst.parts[fst.parts.index("site-packages") + 1:]
@@ -97,7 +100,7 @@ class ImportResult:
                 shown += f" (installed by rosco {_version('rosco')})"
         lines = [f"Converted by {IMPORTER} from {shown}"]
         lines += [f"  {role}: {os.path.relpath(path, fst.parent)}"
-                  for role, path in self.sources.items() if role != "fst"]
+                  for role, path in self.sources.items() if role != MAIN]
         lines += [f"note: {n}" for n in self.notes]
         lines += [f"warning: {w}" for w in self.warnings]
         return "\n".join(lines)
@@ -139,7 +142,7 @@ class _Deck:
         self.vt = self.reader.fst_vt
         self.warnings: list = []
         self.notes: list = []
-        self.sources: dict = {"fst": str(fst)}
+        self.sources: dict = {}
         self.keys: dict = {}
 
     def path(self, base: Path, name: str, role: str) -> Path:
@@ -223,10 +226,8 @@ def _table(deck: _Deck, module: str, keys: tuple, vt: dict) -> dict:
 
 def _main(deck: _Deck):
     r = deck.reader
-    deck.read("OpenFAST main", deck.fst, r.read_MainInput)
-    fst = deck.vt["Fst"]
-    deck.sources.pop("OpenFAST main")             # it is sources["fst"]
-    deck.vt["OpenFAST main"] = fst
+    deck.read(MAIN, deck.fst, r.read_MainInput)
+    fst = deck.vt[MAIN] = deck.vt["Fst"]           # the main file's keys under its role
     comp = {k: fst.get(k) for k in ("CompElast", "CompAero", "CompServo", "CompHydro",
                                     "CompSub", "CompMooring", "CompIce", "CompInflow")}
     if comp["CompElast"] not in (1, 2):
@@ -565,7 +566,7 @@ def read_openfast(path) -> ImportResult:
                       yaw_bearing_mass=deck.number("ElastoDyn", "YawBrMass", rule=">= 0"))
     blade = _blade(deck, comp, ed_file, nb, tip - hubr)
     tower = _tower(deck, ed_file, flexible_tower)
-    g = deck.number("OpenFAST main", "Gravity", rule=">= 0")
+    g = deck.number(MAIN, "Gravity", rule=">= 0")
     name = fst.stem
     turbine = Turbine(name=name, rotor=Rotor(speed=rpm * math.pi / 30.0, blades=nb,
                                              precone=math.radians(cones[0])),

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Optional
 
 import numpy as np
 
-from .tables import format_table
+from .tables import error_cell, error_note, format_table
 
 if TYPE_CHECKING:
     from ..assembly.turbine import TurbineModel
@@ -128,11 +128,8 @@ class ModalResult:
                 unit = "Hz" if self.standstill else "per-rev"
                 footer.append(f"({self.unresolved} modes above {s['resolution_per_rev']:g} "
                               f"{unit} not shown: raise --max-per-rev)")
-        est = s.get("error_estimate")
-        if est:
-            footer.append(f"estimated errors: Richardson from {est['elements'][0]} and "
-                          f"{est['elements'][1]} elements per blade (converged - reported, "
-                          "relative)")
+        if s.get("error_estimate"):
+            footer.append(error_note(s["error_estimate"], "elements per blade"))
         footer.append(f"computed in {self.compute_time:.2f} s")
         return format_table(header, self.modes, footer,
                             unit="Hz" if self.standstill else "per-rev")
@@ -216,11 +213,9 @@ class BladeModesResult:
                   else f"{'-':>12}")
             lines.append(f"{m.family + ' ' + str(m.index):<16}{pr}"
                          f"{m.frequency_hz:>12.5f}{m.damping_ratio:>12.2e}"
-                         + (error_text(m.frequency_error) if self.estimated else ""))
-        est = self.settings.get("error_estimate")
-        if est:
-            lines.append(f"estimated errors: Richardson from {est['elements'][0]} and "
-                         f"{est['elements'][1]} elements (converged - reported, relative)")
+                         + (error_cell(m.frequency_error) if self.estimated else ""))
+        if self.estimated:
+            lines.append(error_note(self.settings["error_estimate"]))
         return "\n".join(lines)
 
     @property
@@ -231,11 +226,6 @@ class BladeModesResult:
         """Mode shapes (flap u3, lead-lag u2, twist theta1 along the span) to a PNG file."""
         from .plotting import plot_blade_modes
         return plot_blade_modes(self, path, count=count)
-
-
-def error_text(e) -> str:
-    """An estimated relative error as a 12-wide table cell ('-' when not estimated)."""
-    return f"{e:>+12.1e}" if e is not None else f"{'-':>12}"
 
 
 def mode_shape(beam: BeamElements, x: np.ndarray) -> dict:

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ['ordinal', 'mode_name', 'format_table']
+__all__ = ['ordinal', 'mode_name', 'format_table', 'error_cell', 'error_note']
 
 
 def ordinal(k: int) -> str:
@@ -36,11 +36,21 @@ def _fixed(m):
     return None if not getattr(m, "whirl", None) or f is None or not np.isfinite(f) else f
 
 
-def _error(m, shown: bool) -> str:
-    if not shown:
-        return ""
-    e = getattr(m, "frequency_error", None)
+def error_cell(e) -> str:
+    """An estimated relative error as a 12-wide table cell ('-' when not estimated)."""
     return f"{e:>+12.1e}" if e is not None else f"{'-':>12}"
+
+
+def error_note(estimate: dict, elements: str = "elements") -> str:
+    """The footer line saying where the estimated errors come from
+    (``settings["error_estimate"]`` of hawt_core.analyses.accuracy)."""
+    coarse, fine = estimate["elements"]
+    return (f"estimated errors: Richardson from {coarse} and {fine} {elements} (converged - "
+            "reported, relative)")
+
+
+def _error(m, shown: bool) -> str:
+    return error_cell(getattr(m, "frequency_error", None)) if shown else ""
 
 
 def format_table(header: str, modes, footer=(), unit: str = "per-rev") -> str:

@@ -276,7 +276,7 @@ class RigidSystem:
         vr_P = vr_SH[..., :, None, :] + _cross(wr_H[..., :, None, :],
                                                rho[..., None, :, :])     # (..., 2, Nb, 3)
         v_P = v_SH[..., None, :] + _cross(w_H[..., None, :], rho)
-        return dict(qy=qy, qh=qh, qd=qd, U1=U1, U2=U2, U3=U3, U4=U4, Uc=Uc, fr=fr, y1=y1,
+        return dict(qy=qy, qh=qh, qd=qd, U1=U1, U2=U2, U3=U3, U4=U4, fr=fr, y1=y1,
                     s3=s3, h2=h2, y1h2=y1h2, w_Y=w_Y, w_H=w_H, w_G=w_G, wr_H=wr_H,
                     wr_S=wr_S, wr_E=wr_E, wr_G=wr_G,
                     vr_SH=vr_SH, v_SH=v_SH, vr_P=vr_P, v_P=v_P, rho=rho)
