@@ -352,12 +352,3 @@ def test_a_value_the_reader_cannot_convert_is_named_with_its_key_and_line(tmp_pa
     with pytest.raises(TurbineFileError) as e:
         read_openfast(d / "NREL-5MW.fst")
     assert f"NumBl = 'three' (line {line})" in str(e.value)
-
-
-def test_a_windio_file_is_recognised_and_refused_with_what_to_do(tmp_path, capsys):
-    f = tmp_path / "turbine.yaml"
-    f.write_text("windIO_version: '2.0'\nname: x\nassembly: {number_of_blades: 3}\n"
-                 "components: {}\n")
-    assert hawt_main(["blade-modes", str(f)]) == 2
-    err = capsys.readouterr().err
-    assert "WindIO" in err and "hawt import openfast" in err

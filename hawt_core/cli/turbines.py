@@ -1,5 +1,5 @@
-"""``hawt turbines`` (the shipped turbines) and ``hawt import`` (an OpenFAST deck -> a hawt
-turbine file)."""
+"""``hawt turbines`` (the shipped turbines) and ``hawt import`` (an OpenFAST deck or a WindIO
+file -> a hawt turbine file)."""
 
 from __future__ import annotations
 
@@ -32,15 +32,20 @@ def _turbines_args(p):
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
 
 
-@command("import", help="convert an OpenFAST deck into a hawt turbine file",
+@command("import", help="convert an OpenFAST deck or a WindIO file into a hawt turbine file",
          description="Read an OpenFAST deck (.fst with its ElastoDyn, BeamDyn, ServoDyn files) "
-                     "with openfast-io and write the hawt turbine file (YAML). What is read "
-                     "but not modelled is printed as a warning and kept in the file's header.")
+                     "with openfast-io, or a WindIO turbine file with windio (validated "
+                     "against its schema first), and write the hawt turbine file (YAML). What "
+                     "is read but not modelled is printed as a warning and kept in the file's "
+                     "header.")
 def cmd_import(args) -> int:
     from ..io import dump_turbine
-    from ..io.openfast import read_openfast
     from dataclasses import replace
-    result = read_openfast(args.path)
+    if args.format == "openfast":
+        from ..io.openfast import read_openfast as read
+    else:
+        from ..io.windio import read_windio as read
+    result = read(args.path)
     turbine = result.turbine
     if args.name:
         turbine = replace(turbine, name=args.name)
@@ -60,10 +65,11 @@ def cmd_import(args) -> int:
 
 @cmd_import.arguments
 def _import_args(p):
-    p.add_argument("format", choices=("openfast",), help="the input format")
-    p.add_argument("path", metavar="PATH.fst", help="the deck's main file")
+    p.add_argument("format", choices=("openfast", "windio"), help="the input format")
+    p.add_argument("path", metavar="PATH",
+                   help="the deck's main file (.fst) or the WindIO turbine file (.yaml)")
     p.add_argument("-o", "--output", metavar="FILE.yaml", default=None,
                    help="write the hawt turbine file here (default: standard output)")
-    p.add_argument("--name", default=None, help="turbine name (default: the deck's file name)")
+    p.add_argument("--name", default=None, help="turbine name (default: the input's file name)")
     p.add_argument("--description", default=None,
                    help="one line saying what the turbine is (kept in the header)")

@@ -1,4 +1,5 @@
-"""Where a turbine comes from: a shipped short name, a hawt file or an OpenFAST deck.
+"""Where a turbine comes from: a shipped short name, a hawt file, an OpenFAST deck or a WindIO
+file.
 
 ``load_any(spec)`` is what every command and the ROS node take as TURBINE:
 
@@ -7,6 +8,9 @@
   ``iea15mw``, ...; :func:`shipped_turbines` lists them with what they are);
 - a path ending in ``.fst``: an OpenFAST deck, imported by :mod:`hawt_core.io.openfast`
   (needs the optional ``openfast-io``); its warnings are issued as TurbineFileWarning;
+- a YAML file whose top-level keys are WindIO's (``windIO_version``, ``assembly``,
+  ``components``): a WindIO turbine, imported by :mod:`hawt_core.io.windio` (needs the
+  optional ``windio``), warnings likewise;
 - any other path: a hawt turbine file (YAML, docs/turbine-format.md).
 
 The shipped NREL 5-MW and IEA 15-MW files were converted by hawt's importer from the decks
@@ -20,7 +24,7 @@ from pathlib import Path
 from ..model import Turbine
 from .turbine_yaml import TurbineFileError, TurbineFileWarning, default_turbine_path, load_turbine
 
-__all__ = ["SHIPPED", "shipped_path", "shipped_turbines", "load_any", "describe"]
+__all__ = ["SHIPPED", "shipped_path", "shipped_turbines", "load_any", "describe", "is_windio"]
 
 _DATA = Path(__file__).resolve().parent.parent / "data"
 
@@ -82,21 +86,23 @@ def load_any(spec=None) -> Turbine:
         return load_turbine(shipped_path(text))
     if p.suffix.lower() == ".fst":
         from .openfast import read_openfast
-        result = read_openfast(p)
-        for w in result.warnings:
-            warnings.warn(w, TurbineFileWarning, stacklevel=2)
-        return result.turbine
+        return _imported(read_openfast(p))
     if not p.exists() and "/" not in text and not p.suffix:
         shipped_path(text)                 # raises with the list of shipped names
-    if p.suffix.lower() in (".yaml", ".yml") and _is_windio(p):
-        raise TurbineFileError(str(p), [
-            "a WindIO turbine file (windIO_version / assembly / components): hawt does not "
-            "read WindIO yet; use the turbine's OpenFAST deck (hawt import openfast) or a "
-            "hawt turbine file"])
+    if p.suffix.lower() in (".yaml", ".yml") and is_windio(p):
+        from .windio import read_windio
+        return _imported(read_windio(p))
     return load_turbine(p)
 
 
-def _is_windio(p: Path) -> bool:
+def _imported(result) -> Turbine:
+    """The turbine of an ImportResult, its warnings issued as TurbineFileWarning."""
+    for w in result.warnings:
+        warnings.warn(w, TurbineFileWarning, stacklevel=3)
+    return result.turbine
+
+
+def is_windio(p: Path) -> bool:
     """True when the top-level keys of a YAML file (a cheap look at its first 64 kB) are
     WindIO's."""
     try:

@@ -36,32 +36,20 @@ from __future__ import annotations
 import math
 import os
 import re
-from importlib import metadata
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from ..model import Beam, Drivetrain, Gravity, Hub, Nacelle, Rotor, SectionTable, Turbine
+from .imported import (ELEMENTS, ImportResult, iec_axes_to_hawt, package_version,
+                       sections_from_matrices, untwist_sections)
 from .turbine_yaml import TurbineFileError
 
-__all__ = ["ImportResult", "read_openfast", "IMPORTER", "ELEMENTS", "TOWER_STEEL",
-           "BEAMDYN_TO_HAWT"]
-
-def _version(dist: str) -> str:
-    try:
-        return metadata.version(dist)
-    except metadata.PackageNotFoundError:
-        return "unknown"
-
+__all__ = ["ImportResult", "read_openfast", "IMPORTER", "ELEMENTS", "TOWER_STEEL"]
 
 #: Importer name and version written into the header of converted files.
-IMPORTER = f"hawt {_version('hawt')} OpenFAST importer (openfast-io {_version('openfast-io')})"
-
-#: Finite elements of the imported blade and tower (hawt files must name them): 64 per
-#: blade put the NREL 5-MW blade's first five frequencies within 0.1 % of converged (the
-#: Richardson estimates of ``--error-estimate``: 0.08 % flap 1, 0.05 % edge 1).
-ELEMENTS = {"blade": 64, "tower": 16}
+IMPORTER = (f"hawt {package_version('hawt')} OpenFAST importer "
+            f"(openfast-io {package_version('openfast-io')})")
 
 #: Steel-tube assumptions for what an ElastoDyn tower file lacks (torsional rigidity and
 #: section rotary inertia): G/E of steel and E / rho [m^2/s^2] with ElastoDyn's effective
@@ -71,39 +59,6 @@ TOWER_STEEL = {"G_over_E": 80.8 / 210.0, "E_over_rho": 210e9 / 8500.0}
 
 #: Role of the deck's main file (.fst) in ``ImportResult.sources`` and the messages.
 MAIN = "OpenFAST main"
-
-#: BeamDyn section components (x, y, z) -> hawt blade frame (b1, b2, b3): rows are hawt axes.
-BEAMDYN_TO_HAWT = np.array([[0.0, 0.0, 1.0], [0.0, -1.0, 0.0], [1.0, 0.0, 0.0]])
-
-
-@dataclass
-class ImportResult:
-    """A turbine read from a deck, with what the reader had to say about it.
-
-    ``warnings``: data read but not modelled, or estimated (each names the file and key);
-    ``notes``: what was taken from where; ``sources``: the files read, by role.
-    """
-
-    turbine: Turbine
-    warnings: list = field(default_factory=list)
-    notes: list = field(default_factory=list)
-    sources: dict = field(default_factory=dict)
-
-    def header(self) -> str:
-        """Provenance lines for a converted file's header comment."""
-        fst = Path(self.sources.get(MAIN, "?"))
-        shown = str(fst)
-        if "site-packages" in fst.parts:           # a deck from an installed wheel (rosco)
-            rel = fst.parts[fst.parts.index("site-packages") + 1:]
-            shown = f"<site-packages>/{'/'.join(rel)}"
-            if rel and rel[0] == "Examples":
-                shown += f" (installed by rosco {_version('rosco')})"
-        lines = [f"Converted by {IMPORTER} from {shown}"]
-        lines += [f"  {role}: {os.path.relpath(path, fst.parent)}"
-                  for role, path in self.sources.items() if role != MAIN]
-        lines += [f"note: {n}" for n in self.notes]
-        lines += [f"warning: {w}" for w in self.warnings]
-        return "\n".join(lines)
 
 
 def _need_reader():
@@ -335,10 +290,8 @@ def _blade_beamdyn(deck: _Deck, comp: dict, nb: int):
         raise TurbineFileError(str(bd_main), [f"kp_zr: the key points must run outward "
                                               f"along z (got {kp[0, 2]} .. {kp[-1, 2]} m)"])
     stations = np.asarray(blade["radial_stations"], float)
-    T = np.zeros((6, 6))
-    T[:3, :3] = T[3:, 3:] = BEAMDYN_TO_HAWT
-    K = T @ np.asarray(blade["beam_stiff"], float) @ T.T
-    M = T @ np.asarray(blade["beam_inertia"], float) @ T.T
+    K = iec_axes_to_hawt(blade["beam_stiff"])
+    M = iec_axes_to_hawt(blade["beam_inertia"])
     # section twist at the stations from the key points (towards feather -> minus hawt's)
     twist = -np.radians(np.interp(stations * length + kp[0, 2], kp[:, 2], kp[:, 3]))
     damp = blade.get("damp_type")
@@ -349,13 +302,6 @@ def _blade_beamdyn(deck: _Deck, comp: dict, nb: int):
                 curve=float(np.abs(kp[:, :2]).max()))
 
 
-def _rotate6(R: np.ndarray, A: np.ndarray) -> np.ndarray:
-    """R6 A R6^T per station with R6 = diag(R, R): R (ns, 3, 3), A (ns, 6, 6)."""
-    R6 = np.zeros(A.shape)
-    R6[:, :3, :3] = R6[:, 3:, 3:] = R
-    return R6 @ A @ np.swapaxes(R6, -1, -2)
-
-
 def _interp(x, xp, fp):
     fp = np.asarray(fp)
     flat = fp.reshape(len(xp), -1)
@@ -364,8 +310,6 @@ def _interp(x, xp, fp):
 
 
 def _blade(deck: _Deck, comp: dict, ed_file: Path, nb: int, length: float) -> Beam:
-    from ..numerics.rotations import rot1
-
     bd = _blade_beamdyn(deck, comp, nb)
     if comp["CompElast"] == 2:
         if abs(bd["length"] - length) > 1e-3 * length:
@@ -376,13 +320,10 @@ def _blade(deck: _Deck, comp: dict, ed_file: Path, nb: int, length: float) -> Be
             deck.warnings.append(
                 f"{bd['file'].name}: kp_xr, kp_yr (prebend/sweep up to {bd['curve']:.3g} m) "
                 "read but not modelled yet: hawt uses a straight reference line along kp_zr")
-        R = rot1(bd["twist"])
         deck.notes.append("blade: the full 6x6 stiffness and mass of the BeamDyn blade "
                           "(CompElast = 2), turned by the initial twist into hawt's blade frame")
-        sec = SectionTable(stations=bd["stations"], mass=bd["M"][:, 0, 0],
-                           i1=bd["M"][:, 3, 3], i2=bd["M"][:, 4, 4], i3=bd["M"][:, 5, 5],
-                           gj=bd["K"][:, 3, 3], ei2=bd["K"][:, 4, 4], ei3=bd["K"][:, 5, 5],
-                           stiffness_6x6=_rotate6(R, bd["K"]), mass_6x6=_rotate6(R, bd["M"]))
+        sec = sections_from_matrices(bd["stations"], untwist_sections(bd["K"], bd["twist"]),
+                                     untwist_sections(bd["M"], bd["twist"]))
         return Beam(length=bd["length"], sections=sec, elements=ELEMENTS["blade"])
 
     # ElastoDyn blade (CompElast = 1)
@@ -573,5 +514,6 @@ def read_openfast(path) -> ImportResult:
                       hub=hub, nacelle=nacelle, blade=blade, tower=tower,
                       gravity=Gravity(enabled=g > 0, g=g if g > 0 else 9.81),
                       drivetrain=_drivetrain(deck, ed_file))
-    return ImportResult(turbine=turbine, warnings=deck.warnings, notes=deck.notes,
-                        sources=deck.sources)
+    return ImportResult(turbine=turbine, importer=IMPORTER, main_role=MAIN,
+                        warnings=deck.warnings, notes=deck.notes, sources=deck.sources,
+                        packages={"Examples": "rosco"})
