@@ -194,12 +194,26 @@ def test_hawt_modes_prints_the_same_digits_as_before(capsys):
     """Regression (a frozen copy, not a physics reference): `hawt modes` (paper turbine, 4
     elements, defaults) prints the header and every row of tests/data/table2_hawt_modes.txt,
     the output of the code before the Floquet work for N blades, to the last printed digit
-    (only the timing line may differ)."""
+    (only the timing line may differ), except values below 1e-9 (the damping of the
+    undamped torsion modes, round-off that changes with the LAPACK build): those must stay
+    below 1e-9."""
     from pathlib import Path
 
     from hawt_core.cli import main
     assert main(["modes"]) == 0
     out = capsys.readouterr().out.splitlines()
     golden = (Path(__file__).parent / "data" / "table2_hawt_modes.txt").read_text().splitlines()
-    assert out[:-1] == golden
+
+    def cells(line):
+        out = []
+        for tok in line.split():
+            try:
+                x = float(tok)
+            except ValueError:
+                out.append(tok)
+                continue
+            out.append("round-off" if 0 < abs(x) < 1e-9 else tok)
+        return out
+
+    assert [cells(line) for line in out[:-1]] == [cells(line) for line in golden]
     assert out[-1].startswith("computed in")
