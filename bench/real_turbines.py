@@ -6,10 +6,11 @@ line a user types, timed end to end, plus the model's unknowns.  Cases:
 - ``hawt blade-modes nrel5mw`` / ``iea15mw`` (one blade, the shipped mesh: 64 elements);
 - ``hawt modes nrel5mw --rotor-speed 0`` (at rest: one eigenproblem about the static
   equilibrium, gravity included);
-- ``hawt modes nrel5mw`` with gravity off (multi-blade coordinates: one eigenproblem) and on
-  (the deck's gravity: a periodic system, Hill's method in multi-blade coordinates or Radau
-  IIA monodromy);
-- ``hawt campbell nrel5mw --speeds 0.2:1.4:15`` without gravity.
+- ``hawt modes nrel5mw`` with the deck's gravity (the default: a periodic steady state by
+  harmonic balance, then Hill's method in multi-blade coordinates, a few harmonics of
+  3 per-rev), at 32 and 64 (the shipped) elements per blade; and with gravity off
+  (multi-blade coordinates: one eigenproblem);
+- ``hawt campbell nrel5mw --speeds 0.2:1.4:15`` without gravity, and (full run) with it.
 
 Goals of issue 11: ``hawt modes nrel5mw`` < 10 s, ``hawt campbell nrel5mw`` < 60 s.
 
@@ -74,13 +75,18 @@ def main():
         run("hawt modes nrel5mw --rotor-speed 0 --max-per-rev 3 (at rest, Hz)",
             ["modes", "nrel5mw", "--rotor-speed", "0", "--max-per-rev", "3"])
         run("hawt modes nrel5mw (no gravity: multi-blade, one eigenproblem)", ["modes", ng])
+        run("hawt modes nrel5mw --max-per-rev 8 --elements 32 (gravity)",
+            ["modes", "nrel5mw", "--max-per-rev", "8", "--elements", "32"])
+        run("hawt modes nrel5mw --max-per-rev 8 (gravity, 64 elements)",
+            ["modes", "nrel5mw", "--max-per-rev", "8"])
         run("hawt campbell nrel5mw --speeds 0.2:1.4:15 (no gravity)",
             ["campbell", ng, "--speeds", "0.2:1.4:15"])
         if not quick:
-            run("hawt modes nrel5mw --method hill --max-per-rev 8 (gravity)",
-                ["modes", "nrel5mw", "--method", "hill", "--max-per-rev", "8"], timeout=1200)
-            run("hawt modes nrel5mw (gravity: Radau monodromy, Fast Floquet)",
+            run("hawt modes nrel5mw (gravity, 64 elements, default band 50 per-rev)",
                 ["modes", "nrel5mw"], timeout=1200)
+            run("hawt campbell nrel5mw --speeds 0.2:1.4:15 --elements 32 (gravity)",
+                ["campbell", "nrel5mw", "--speeds", "0.2:1.4:15", "--elements", "32"],
+                timeout=1800)
 
 
 if __name__ == "__main__":

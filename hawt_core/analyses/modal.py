@@ -53,9 +53,11 @@ __all__ = ["modal_analysis", "periodic_dae", "validate_request", "Cancelled", "M
            "MAX_ELEMENTS", "MAX_PER_REV"]
 
 
-#: "auto": multi-blade coordinates (Hill's method with constant coefficients, one
-#: eigenproblem) where they make the system time-invariant (3+ identical blades on a rigid
-#: hub, constant steady state), otherwise Radau IIA monodromy; "radau", "paper": monodromy
+#: "auto": Hill's method in multi-blade coordinates where the rotor's symmetry allows them
+#: (3+ identical blades on a rigid hub): one eigenproblem when they make the system
+#: time-invariant (constant steady state), a few harmonics of Nb per-rev with gravity or
+#: tilt (truncation by the exponents' convergence); otherwise Radau IIA monodromy;
+#: "radau", "paper": monodromy
 #: by time marching; "hill": Hill's method (in multi-blade coordinates where the rotor's
 #: symmetry allows it, in the rotating frame otherwise)
 METHODS = ("auto", "radau", "paper", "hill")
@@ -279,7 +281,10 @@ def _hill_floquet(model: TurbineModel, dae: LinearPeriodicDAE, transform, max_pe
     pos = {int(r): i for i, r in enumerate(srows)}
     obs = np.array([pos[int(r)] for r in rows])
     frame_rows = rows
-    hm = hill_modes(dae, max_per_rev * omega, observed=frame_rows, weights=wts ** 2)
+    # multi-blade coordinates of an isotropic rotor are periodic only through gravity and
+    # tilt (weakly): the truncation is chosen by the exponents' convergence (hill_modes)
+    hm = hill_modes(dae, max_per_rev * omega, observed=frame_rows, weights=wts ** 2,
+                    truncation="converged" if transform is not None else "tail")
     M = int(min(MAX_SAMPLES, max(128, 2 ** np.ceil(np.log2(2.5 * max_per_rev)))))
     tm = np.arange(M) * T / M
     lam = hm.exponents
@@ -362,7 +367,7 @@ def _modal_analysis(turbine, elements, rotor_speed, steps, method, fast, harmoni
     transform = MultiBladeTransform(model) if model.n_blades >= 3 and not standstill else None
     mbc = transform.dae(dae) if transform is not None and dae.S is not None else None
     if method == "auto":
-        method = "hill" if (mbc is not None and steady.constant) or standstill else "radau"
+        method = "hill" if mbc is not None or standstill else "radau"
     use_fast = dae.S is not None if fast is None else (bool(fast) and dae.S is not None)
     rows, wts = model.display_rows()
     # the dominant harmonic is judged on displacement-like rows weighted to tip metres
@@ -388,6 +393,10 @@ def _modal_analysis(turbine, elements, rotor_speed, steps, method, fast, harmoni
         unresolved = max(0, d - int(fl.exponents.size))     # above the band
         extra = {"frame": frame, "hill_harmonics": hm.harmonics,
                  "hill_size": hm.size, "coefficient_harmonics": hm.coefficient_harmonics}
+        if hm.change is not None:
+            # the exponents' move from H - 1 to H harmonics: a bound on the truncation error
+            extra["hill_change_per_rev"] = hm.change / (2 * np.pi / (
+                model.period if np.isfinite(model.period) else STANDSTILL_PERIOD))
     timings["floquet"] = time.perf_counter() - t1
     stage(0.85, "labelling modes")
     if transform is not None:

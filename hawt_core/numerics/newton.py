@@ -12,9 +12,19 @@ class ConvergenceError(RuntimeError):
     """A Newton iteration did not converge."""
 
 
+#: A step with a reused Jacobian must shrink the residual by this factor, else the next
+#: step takes a fresh one (``newton(reuse_jacobian=True)``).
+CHORD_CONTRACTION = 0.05
+
+
 def newton(fun, jac, y0, tol=1e-9, max_iter=30, what="steady state", fixed=None,
-           linear_solve=None):
+           linear_solve=None, reuse_jacobian: bool = False):
     """Newton's method with a sparse LU; ``tol`` is relative to the first residual's scale.
+
+    ``reuse_jacobian``: keep the Jacobian (and its factors) while each step shrinks the
+    largest residual by at least CHORD_CONTRACTION (the chord method; a weakly nonlinear
+    problem, such as a harmonic balance started from the rigid rotation, then needs one
+    Jacobian instead of one per step); a step that does not takes a fresh Jacobian next.
 
     ``linear_solve(J, r)``: an optional solver of the Newton step ``J dy = r`` (e.g. a
     preconditioned Krylov method); returning None falls back to the sparse LU, which is
@@ -34,25 +44,31 @@ def newton(fun, jac, y0, tol=1e-9, max_iter=30, what="steady state", fixed=None,
     n, k = len(y), len(fixed)
     P = sp.csc_matrix((np.ones(k), (fixed, np.arange(k))), shape=(n, k))
     Bcols = np.random.default_rng(12345).standard_normal((n, k))
+    J, lu = None, None
     for it in range(max_iter):
         if not np.all(np.isfinite(r)):
             raise ConvergenceError(f"{what}: residual became non-finite at iteration {it}")
         if np.max(np.abs(r)) <= tol * scale:
             return y, it
-        J = sp.csc_matrix(jac(y))
+        if J is None:
+            J, lu = sp.csc_matrix(jac(y)), None
         dy = linear_solve(J, r) if linear_solve is not None and not k else None
-        if dy is not None:
-            y = y - dy
-            r = fun(y)
-            continue
-        if k:
-            B = sp.csc_matrix(Bcols * (abs(J).max() / np.sqrt(n)))
-            J = sp.bmat([[J, B], [P.T, None]], format="csc")
-        try:
-            dy = spl.splu(J).solve(np.concatenate([r, np.zeros(k)]))[:n]
-        except RuntimeError as exc:  # singular factor
-            raise ConvergenceError(f"{what}: singular Jacobian at iteration {it} ({exc})") from exc
+        if dy is None:
+            if lu is None:
+                A = J
+                if k:
+                    B = sp.csc_matrix(Bcols * (abs(J).max() / np.sqrt(n)))
+                    A = sp.bmat([[J, B], [P.T, None]], format="csc")
+                try:
+                    lu = spl.splu(A)
+                except RuntimeError as exc:  # singular factor
+                    raise ConvergenceError(f"{what}: singular Jacobian at iteration {it} "
+                                           f"({exc})") from exc
+            dy = lu.solve(np.concatenate([r, np.zeros(k)]))[:n]
+        r_old = np.max(np.abs(r))
         y = y - dy
         r = fun(y)
+        if not reuse_jacobian or not np.max(np.abs(r)) <= CHORD_CONTRACTION * r_old:
+            J = None                             # a fresh Jacobian for the next step
     raise ConvergenceError(f"{what}: Newton did not converge in {max_iter} iterations "
                            f"(max residual {np.max(np.abs(r)):.3e}, tolerance {tol * scale:.3e})")

@@ -244,7 +244,10 @@ def _harmonic_balance(model, harmonics, tol, max_iter, progress, guess) -> Perio
         does not reach its tolerance."""
         if M * n <= ITERATIVE_UNKNOWNS or model.n_blades < 3:
             return None      # small, or one or two blades: strongly periodic, the LU wins
-        pre = _AveragedPreconditioner(model, blocks["jy"], blocks["jd"], times, T)
+        if blocks.get("preconditioned") is not J:     # Newton keeps J while it contracts
+            blocks["pre"] = _AveragedPreconditioner(model, blocks["jy"], blocks["jd"], times, T)
+            blocks["preconditioned"] = J
+        pre = blocks["pre"]
         P = spl.LinearOperator(J.shape, matvec=pre.solve, dtype=float)
         dy, info = spl.gmres(J, r, M=P, rtol=1e-10, atol=0.0, restart=60, maxiter=10)
         return dy if info == 0 and np.all(np.isfinite(dy)) else None
@@ -254,6 +257,10 @@ def _harmonic_balance(model, harmonics, tol, max_iter, progress, guess) -> Perio
     ign = ignorable_columns(model.jacobians(np.zeros(n), Y[0], times[0])[0])
     Yflat, it = newton(residual, jacobian, Y.ravel(), tol=tol, max_iter=max_iter,
                        what=f"periodic steady state (harmonic balance, {harmonics} harmonics)",
-                       fixed=ign, linear_solve=krylov)
+                       fixed=ign, linear_solve=krylov,
+                       # the chord method where each Jacobian is dear (GMRES-sized systems);
+                       # small ones keep Newton's quadratic last step (a steady state far
+                       # below the tolerance, whose symmetry Fast Floquet relies on)
+                       reuse_jacobian=M * n > ITERATIVE_UNKNOWNS and model.n_blades >= 3)
     return PeriodicSteadyState(times=times, states=Yflat.reshape(M, n), period=T, iterations=it,
                                harmonics=harmonics)
