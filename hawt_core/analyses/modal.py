@@ -394,9 +394,9 @@ def _modal_analysis(turbine, elements, rotor_speed, steps, method, fast, harmoni
         extra = {"frame": frame, "hill_harmonics": hm.harmonics,
                  "hill_size": hm.size, "coefficient_harmonics": hm.coefficient_harmonics}
         if hm.change is not None:
-            # the exponents' move from H - 1 to H harmonics: a bound on the truncation error
-            extra["hill_change_per_rev"] = hm.change / (2 * np.pi / (
-                model.period if np.isfinite(model.period) else STANDSTILL_PERIOD))
+            # the exponents' relative move from H - 1 to H harmonics: a bound on the
+            # truncation error
+            extra["hill_relative_change"] = hm.change
     timings["floquet"] = time.perf_counter() - t1
     stage(0.85, "labelling modes")
     if transform is not None:
