@@ -224,7 +224,7 @@ def _check_dofs(deck: _Deck, ed_file: str, nb: int):
     return all(tower), teeter
 
 
-def _drivetrain(deck: _Deck, ed_file: Path):
+def _drivetrain(deck: _Deck, ed_file: Path, servo: dict | None):
     """ElastoDyn's DrTrDOF (shaft torsion, DTTorSpr/DTTorDmp) and GenDOF (a free generator,
     GenIner x GBRatio^2 on the low-speed shaft) -> a hawt Drivetrain (None: both off, the
     rotor turns at RotSpeed)."""
@@ -236,7 +236,7 @@ def _drivetrain(deck: _Deck, ed_file: Path):
     if deck.number("ElastoDyn", "GBoxEff", rule="> 0") != 100.0:
         deck.warnings.append(f"{ed_file.name}: GBoxEff = {deck.vt['ElastoDyn']['GBoxEff']} "
                              "read but not modelled (an ideal gearbox)")
-    torque = deck.vt.get("ServoDyn", {}).get("VSContrl") if deck.vt["Fst"].get("CompServo") else 0
+    torque = servo.get("VSContrl") if servo is not None else 0
     if free and torque:
         # the generator torque comes from a controller hawt does not model (yet): a
         # speed-regulated generator is closer to it than a torque-free one (no steady state
@@ -421,21 +421,29 @@ def _tower(deck: _Deck, ed_file: Path, flexible: bool) -> Beam | None:
     return Beam(length=height, sections=sec, elements=ELEMENTS["tower"])
 
 
-def _yaw_spring(deck: _Deck, comp: dict) -> tuple:
+def _servodyn(deck: _Deck, comp: dict) -> dict | None:
+    """The deck's ServoDyn keys (None without ServoDyn, or when it cannot be read: warned)."""
     if not comp["CompServo"]:
-        return 0.0, 0.0
+        return None
     try:
         sd = deck.path(deck.fst.parent, deck.vt["Fst"]["ServoFile"], "ServoDyn")
         deck.read("ServoDyn", sd, deck.reader.read_ServoDyn)
     except TurbineFileError as exc:
-        deck.warnings.append(f"ServoDyn not read ({exc}); the yaw spring and damper are 0")
+        deck.warnings.append(f"ServoDyn not read ({exc}); the yaw spring and damper are 0 "
+                             "and no generator-torque controller is assumed")
+        return None
+    deck.warnings.append(f"{sd.name}: the pitch, torque and yaw controllers are not "
+                         "modelled (fixed pitch, no generator torque)")
+    return deck.vt["ServoDyn"]
+
+
+def _yaw_spring(deck: _Deck, servo: dict | None) -> tuple:
+    if servo is None:
         return 0.0, 0.0
     k = deck.number("ServoDyn", "YawSpr", rule=">= 0")
     c = deck.number("ServoDyn", "YawDamp", rule=">= 0")
     deck.notes.append(f"yaw bearing: spring {k:.6g} N m/rad and damper {c:.6g} N m s/rad "
                       "from ServoDyn (YawSpr, YawDamp)")
-    deck.warnings.append(f"{sd.name}: the pitch, torque and yaw controllers are not "
-                         "modelled (fixed pitch, no generator torque)")
     return k, c
 
 
@@ -491,7 +499,8 @@ def read_openfast(path) -> ImportResult:
         # ElastoDyn's hub: a mass at the apex with inertia about the shaft only
         hub = Hub(radius=hubr, teeter=False, inertia_lateral=0.0,
                   inertia_longitudinal=hub_iner, mass=hub_mass)
-    yaw_k, yaw_c = _yaw_spring(deck, comp)
+    servo = _servodyn(deck, comp)
+    yaw_k, yaw_c = _yaw_spring(deck, servo)
     nac_yaw = deck.number("ElastoDyn", "NacYIner", rule=">= 0")
     # hawt's yaw inertia includes the hub's share (hawt_core.rigid.kane)
     ct, st = math.cos(tilt), math.sin(tilt)
@@ -513,7 +522,7 @@ def read_openfast(path) -> ImportResult:
                                              precone=math.radians(cones[0])),
                       hub=hub, nacelle=nacelle, blade=blade, tower=tower,
                       gravity=Gravity(enabled=g > 0, g=g if g > 0 else 9.81),
-                      drivetrain=_drivetrain(deck, ed_file))
+                      drivetrain=_drivetrain(deck, ed_file, servo))
     return ImportResult(turbine=turbine, importer=IMPORTER, main_role=MAIN,
                         warnings=deck.warnings, notes=deck.notes, sources=deck.sources,
                         packages={"Examples": "rosco"})
