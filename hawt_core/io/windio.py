@@ -91,26 +91,27 @@ class _File:
     def error(self, key: str, message: str) -> TurbineFileError:
         return TurbineFileError(str(self.path), [f"{key}: {message}"])
 
-    def get(self, key: str, required: bool = True, default=None):
-        """The value at a dotted key (``components.hub.diameter``)."""
-        self.used.add(key)
+    def _lookup(self, key: str) -> tuple:
+        """(found, value) at a dotted key (``components.hub.diameter``)."""
         node = self.data
         for part in key.split("."):
             if not isinstance(node, dict) or part not in node:
-                if required:
-                    raise self.error(key, "required key is missing")
-                return default
+                return False, None
             node = node[part]
-        return node
+        return True, node
+
+    def get(self, key: str, required: bool = True, default=None):
+        """The value at a dotted key, counted as read."""
+        self.used.add(key)
+        found, value = self._lookup(key)
+        if not found and required:
+            raise self.error(key, "required key is missing")
+        return value if found else default
 
     def has(self, key: str) -> bool:
-        """Whether a dotted key is present (without counting it as read)."""
-        node = self.data
-        for part in key.split("."):
-            if not isinstance(node, dict) or part not in node:
-                return False
-            node = node[part]
-        return node is not None
+        """Whether a dotted key holds a value (without counting it as read)."""
+        found, value = self._lookup(key)
+        return found and value is not None
 
     def number(self, key: str, rule: str = "finite", required: bool = True,
                default: float = 0.0) -> float:
@@ -119,8 +120,8 @@ class _File:
             return default
         try:
             x = float(value)
-        except (TypeError, ValueError):
-            raise self.error(key, f"{value!r} must be a number") from None
+        except (TypeError, ValueError, OverflowError):
+            raise self.error(key, f"{str(value)[:40]!r} must be a number") from None
         ok = {"finite": True, "> 0": x > 0, ">= 0": x >= 0}[rule]
         if not (math.isfinite(x) and ok):
             raise self.error(key, f"{value!r} must be {rule} and finite")
@@ -130,7 +131,7 @@ class _File:
         value = self.get(key)
         try:
             a = np.array(value, dtype=float)
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):
             raise self.error(key, "must be a list of numbers") from None
         if a.ndim != 1 or not np.all(np.isfinite(a)) or (n is not None and a.size != n):
             raise self.error(key, f"must be a list of {n or 'finite'} finite numbers"
@@ -148,7 +149,7 @@ class _File:
         g = self.grid(f"{key}.grid")
         return g, self.array(f"{key}.values", g.size)
 
-    def unused(self, reasons: dict, depth: int = 6) -> dict:
+    def unused(self, reasons: dict, depth: int = 6):
         """The keys (down to ``depth`` levels) that nothing read, neither themselves nor
         inside them, grouped under the nearest key of ``reasons`` (dotted key -> why it is
         not used); one warning per group, so nothing read is dropped silently."""
@@ -178,7 +179,6 @@ class _File:
                               for k in keys)
             self.warnings.append(f"{self.path.name}: {owner}: {shown} read but not modelled "
                                  f"({why})")
-        return groups
 
 
 #: Why the parts of a WindIO file that hawt does not read are not used (hawt_core.io.windio
@@ -219,8 +219,8 @@ def _validate(path: Path):
     try:
         windIO.validate(dict(data), schema_type="turbine/turbine_schema")
     except jsonschema.exceptions.ValidationError as exc:
-        lines = [ln.strip() for ln in str(exc.message).splitlines()
-                 if ln.strip().startswith("Error ")]
+        lines = [ln.strip()[:300] for ln in str(exc.message).splitlines()
+                 if ln.strip().startswith("Error ")][:20]
         raise TurbineFileError(str(path), [
             "fails the WindIO turbine schema (windIO.validate, windio "
             f"{package_version('windio')})"] + (lines or [str(exc.message)])) from None
@@ -234,7 +234,7 @@ def _sign(f: _File) -> float:
     return -1.0 if orientation == "upwind" else 1.0
 
 
-def _blade(f: _File, nb: int) -> Beam:
+def _blade(f: _File) -> Beam:
     key = "components.blade.structure.elastic_properties"
     if not f.has(key):
         raise f.error(key, "required: hawt needs the blade's beam properties (6x6 stiffness "
@@ -472,7 +472,7 @@ def read_windio(path) -> ImportResult:
     else:
         f.notes.append("drivetrain: no shaft spring_constant: a rigid shaft at the rotor speed")
 
-    blade = _blade(f, nb)
+    blade = _blade(f)
     tower, base = _tower(f)
     f.unused(UNUSED_REASONS)
     f.notes.append(f"gravity: {STANDARD_GRAVITY} m/s^2 (a WindIO turbine names none)")
