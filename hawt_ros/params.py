@@ -42,7 +42,8 @@ class ParameterError(ValueError):
 #: every parameter with dynamic typing so that ``-p step_deg:=1`` (an integer) is accepted
 #: where a float is expected).
 PARAMETERS: Dict[str, Tuple[Any, str]] = {
-    "turbine": ("", "turbine YAML file, OpenFAST deck (.fst) or shipped name (hawt turbines); "
+    "turbine": ("", "turbine YAML file, OpenFAST deck (.fst), WindIO file or shipped name "
+                    "(hawt turbines); "
                     "'' = the shipped default (the paper's Table 1)"),
     "elements": (0, "beam elements per blade; 0 = the turbine file's value"),
     "step_deg": (5.0, "simulation time step as rotor azimuth increment [deg], > 0 and <= 30"),
