@@ -114,8 +114,12 @@ class ModalResult:
         elif s.get("frame") == "multi-blade" and not s.get("hill_harmonics"):
             how = "multi-blade coordinates, time-invariant: one eigenproblem"
         else:
+            H = s.get("hill_harmonics", 0)
             how = (f"Hill's method, {s.get('frame', 'rotating')} frame, "
-                   f"{s.get('hill_harmonics', 0)} harmonics")
+                   f"{H} harmonic{'' if H == 1 else 's'}")
+            if s.get("hill_relative_change") is not None:
+                # the exponents' move from one harmonic fewer: a bound on the truncation error
+                how += f", truncation change {s['hill_relative_change']:.1e}"
         kind = "Modes" if self.standstill else "Dominant frequencies"
         header = (f"{kind} of the turbine '{s['turbine']}' ({'' if self.standstill else 'Floquet, '}{how}), "
                   f"{s['elements']} elements per blade, rotor speed {s['rotor_speed']:.4g} rad/s")
