@@ -14,8 +14,8 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["ImportResult", "ELEMENTS", "IEC_TO_HAWT", "package_version",
-           "iec_axes_to_hawt",
-           "untwist_sections", "sections_from_matrices"]
+           "iec_axes_to_hawt", "untwist_sections", "sections_from_matrices",
+           "interp_stations", "hub_yaw_share"]
 
 
 def package_version(dist: str) -> str:
@@ -57,6 +57,23 @@ def untwist_sections(A: np.ndarray, twist: np.ndarray) -> np.ndarray:
     R6 = np.zeros(np.shape(A))
     R6[:, :3, :3] = R6[:, 3:, 3:] = rot1(np.asarray(twist, float))
     return R6 @ A @ np.swapaxes(R6, -1, -2)
+
+
+def interp_stations(x, xp, fp) -> np.ndarray:
+    """Linear interpolation of per-station arrays ``fp`` (len(xp), ...) to the stations x."""
+    fp = np.asarray(fp, float)
+    flat = fp.reshape(len(xp), -1)
+    return np.stack([np.interp(x, xp, flat[:, j]) for j in range(flat.shape[1])],
+                    -1).reshape((len(x),) + fp.shape[1:])
+
+
+def hub_yaw_share(hub, tilt: float, along: float) -> float:
+    """The hub's inertia about the yaw axis [kg m^2], which hawt's nacelle yaw inertia
+    includes (hawt_core.rigid.kane): its lateral and longitudinal inertias on a shaft tilted
+    by ``tilt`` [rad], and its mass at ``along`` [m] from the yaw axis along the shaft."""
+    ct, st = np.cos(tilt), np.sin(tilt)
+    return float(hub.inertia_lateral * ct ** 2 + hub.inertia_longitudinal * st ** 2
+                 + hub.mass * (along * ct) ** 2)
 
 
 def sections_from_matrices(stations, K: np.ndarray, M: np.ndarray):

@@ -41,8 +41,9 @@ from pathlib import Path
 import numpy as np
 
 from ..model import Beam, Drivetrain, Gravity, Hub, Nacelle, Rotor, SectionTable, Turbine
-from .imported import (ELEMENTS, ImportResult, iec_axes_to_hawt, package_version,
-                       sections_from_matrices, untwist_sections)
+from .imported import (ELEMENTS, ImportResult, hub_yaw_share, iec_axes_to_hawt,
+                       interp_stations, package_version, sections_from_matrices,
+                       untwist_sections)
 from .turbine_yaml import TurbineFileError
 
 __all__ = ["ImportResult", "read_openfast", "IMPORTER", "ELEMENTS", "TOWER_STEEL"]
@@ -302,13 +303,6 @@ def _blade_beamdyn(deck: _Deck, comp: dict, nb: int):
                 curve=float(np.abs(kp[:, :2]).max()))
 
 
-def _interp(x, xp, fp):
-    fp = np.asarray(fp)
-    flat = fp.reshape(len(xp), -1)
-    return np.stack([np.interp(x, xp, flat[:, j]) for j in range(flat.shape[1])],
-                    -1).reshape((len(x),) + fp.shape[1:])
-
-
 def _blade(deck: _Deck, comp: dict, ed_file: Path, nb: int, length: float) -> Beam:
     bd = _blade_beamdyn(deck, comp, nb)
     if comp["CompElast"] == 2:
@@ -352,8 +346,8 @@ def _blade(deck: _Deck, comp: dict, ed_file: Path, nb: int, length: float) -> Be
     ei2, ei3 = adj["AdjFlSt"] * t["FlpStff"], adj["AdjEdSt"] * t["EdgStff"]
     twist = -np.radians(t["StrcTwst"])
     if bd is not None:
-        K = _interp(x, bd["stations"], bd["K"])
-        M = _interp(x, bd["stations"], bd["M"])
+        K = interp_stations(x, bd["stations"], bd["K"])
+        M = interp_stations(x, bd["stations"], bd["M"])
         # what the two files say about the same blade (mass and mean stiffness over the span)
         m_ed, m_bd = (length * np.trapezoid(v, x) for v in (t["BMassDen"], M[:, 0, 0]))
         k_ed, k_bd = (np.trapezoid(v, x) for v in (t["FlpStff"], K[:, 4, 4]))
@@ -502,13 +496,10 @@ def read_openfast(path) -> ImportResult:
     servo = _servodyn(deck, comp)
     yaw_k, yaw_c = _yaw_spring(deck, servo)
     nac_yaw = deck.number("ElastoDyn", "NacYIner", rule=">= 0")
-    # hawt's yaw inertia includes the hub's share (hawt_core.rigid.kane)
-    ct, st = math.cos(tilt), math.sin(tilt)
-    hub_yaw = (hub.inertia_lateral * ct ** 2 + hub.inertia_longitudinal * st ** 2
-               + hub_mass * (overhang * ct) ** 2)
     cg = (deck.number("ElastoDyn", "NacCMzn"), -deck.number("ElastoDyn", "NacCMyn"),
           deck.number("ElastoDyn", "NacCMxn"))
-    nacelle = Nacelle(yaw_inertia=nac_yaw + hub_yaw, yaw_stiffness=yaw_k, yaw_damping=yaw_c,
+    nacelle = Nacelle(yaw_inertia=nac_yaw + hub_yaw_share(hub, tilt, overhang),
+                      yaw_stiffness=yaw_k, yaw_damping=yaw_c,
                       yaw_to_teeter=overhang, shaft_tilt=tilt,
                       yaw_free=deck.flag("ElastoDyn", "YawDOF"),
                       mass=deck.number("ElastoDyn", "NacMass", rule=">= 0"), cg_offset=cg,

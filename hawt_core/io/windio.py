@@ -47,8 +47,9 @@ from pathlib import Path
 import numpy as np
 
 from ..model import Beam, Drivetrain, Gravity, Hub, Nacelle, Rotor, SectionTable, Turbine
-from .imported import (ELEMENTS, ImportResult, iec_axes_to_hawt, package_version,
-                       sections_from_matrices, untwist_sections)
+from .imported import (ELEMENTS, ImportResult, hub_yaw_share, iec_axes_to_hawt,
+                       interp_stations, package_version, sections_from_matrices,
+                       untwist_sections)
 from .turbine_yaml import TurbineFileError
 
 __all__ = ["read_windio", "IMPORTER", "STANDARD_GRAVITY", "MAIN"]
@@ -241,7 +242,7 @@ def _blade(f: _File) -> Beam:
                            "and inertia); a blade given only by its layup (structure.layers) "
                            "needs a cross-section solver first (e.g. WISDEM's PreComp)")
     ref = "components.blade.reference_axis"
-    gz, z = f.curve(f"{ref}.z")
+    _, z = f.curve(f"{ref}.z")
     length = float(z[-1] - z[0])
     if not length > 0:
         raise f.error(f"{ref}.z.values", f"{z[0]} .. {z[-1]} m: must run outward (tip > root)")
@@ -286,7 +287,7 @@ def _blade(f: _File) -> Beam:
     M[:, 3, 4] = M[:, 4, 3] = -opt["i_cp"]
     gt, tw = f.curve("components.blade.outer_shape.twist")
     twist = -np.radians(np.interp(stations, gt, tw))   # towards feather -> minus hawt's
-    K, M = (iec_axes_to_hawt(_interp(stations, g, A)) for g, A in ((gk, K), (gm, M)))
+    K, M = (iec_axes_to_hawt(interp_stations(stations, g, A)) for g, A in ((gk, K), (gm, M)))
     _damping(f, key)
     f.notes.append("blade: the 6x6 stiffness and the mass matrix of "
                    f"{key} (IEC section frame, turned by outer_shape.twist into hawt's "
@@ -305,24 +306,17 @@ def _damping(f: _File, key: str):
                           "not modelled (undamped beams)")
 
 
-def _interp(x, xp, fp):
-    """Linear interpolation of (len(xp), ...) arrays to the stations x."""
-    flat = np.asarray(fp, float).reshape(len(xp), -1)
-    out = np.stack([np.interp(x, xp, flat[:, j]) for j in range(flat.shape[1])], -1)
-    return out.reshape((len(x),) + np.shape(fp)[1:])
-
-
-def _tower(f: _File) -> tuple:
-    """The tower beam (None: no tower given, rigid) and its base height [m]."""
+def _tower(f: _File) -> Beam | None:
+    """The tower beam (None: no tower given, rigid), clamped at its base."""
     if not f.has("components.tower"):
         f.notes.append("tower: none given (components.tower): rigid")
-        return None, 0.0
+        return None
     key = "components.tower.structure.elastic_properties"
     if not f.has(key):
         raise f.error(key, "required: hawt needs the tower's beam properties (K44, K55, K66, "
                            "mass); a tower given only by its layers needs them computed first")
     ref = "components.tower.reference_axis"
-    gz, z = f.curve(f"{ref}.z")
+    _, z = f.curve(f"{ref}.z")
     for a in ("x", "y"):
         off = f.curve(f"{ref}.{a}")[1]
         if np.ptp(off) > 1e-6 * (z[-1] - z[0]):
@@ -365,7 +359,7 @@ def _tower(f: _File) -> tuple:
     _damping(f, key)
     sec = SectionTable(stations=stations, mass=mass, i1=2 * i23, i2=i23, i3=i23, gj=k["K66"],
                        ei2=k["K55"], ei3=k["K44"])
-    return Beam(length=height, sections=sec, elements=ELEMENTS["tower"]), float(z[0])
+    return Beam(length=height, sections=sec, elements=ELEMENTS["tower"])
 
 
 def _rigid_body(f: _File, key: str):
@@ -430,10 +424,6 @@ def read_windio(path) -> ImportResult:
     nac_mass, nac_loc, nac_inertia = _rigid_body(f, f"{dt}.elastic_properties")
     cg = (nac_loc[2], -nac_loc[1], nac_loc[0])          # (x down, y left, z up) -> hawt Y
     nac_yaw = nac_inertia[2] + nac_mass * (nac_loc[0] ** 2 + nac_loc[1] ** 2)
-    ct, st = math.cos(tilt), math.sin(tilt)
-    # hawt's yaw inertia includes the hub's share (hawt_core.rigid.kane)
-    hub_yaw = (hub.inertia_lateral * ct ** 2 + hub.inertia_longitudinal * st ** 2
-               + hub_mass * (along * ct) ** 2)
     yaw_mass = 0.0
     if f.has("components.yaw.elastic_properties"):
         yaw_mass, yaw_loc, yaw_inertia = _rigid_body(f, "components.yaw.elastic_properties")
@@ -441,7 +431,8 @@ def read_windio(path) -> ImportResult:
             f.warnings.append(f"{p.name}: components.yaw.elastic_properties location and "
                               "inertia read but not modelled: the yaw bearing is a point mass "
                               "at the tower top")
-    nacelle = Nacelle(yaw_inertia=nac_yaw + hub_yaw, yaw_to_teeter=s * along, shaft_tilt=tilt,
+    nacelle = Nacelle(yaw_inertia=nac_yaw + hub_yaw_share(hub, tilt, along),
+                      yaw_to_teeter=s * along, shaft_tilt=tilt,
                       yaw_free=False, mass=nac_mass, cg_offset=cg,
                       inertia_pitch=nac_inertia[1], inertia_roll=nac_inertia[0],
                       shaft_height=shaft_height, yaw_bearing_mass=yaw_mass)
@@ -473,7 +464,7 @@ def read_windio(path) -> ImportResult:
         f.notes.append("drivetrain: no shaft spring_constant: a rigid shaft at the rotor speed")
 
     blade = _blade(f)
-    tower, base = _tower(f)
+    tower = _tower(f)
     f.unused(UNUSED_REASONS)
     f.notes.append(f"gravity: {STANDARD_GRAVITY} m/s^2 (a WindIO turbine names none)")
     turbine = Turbine(name=name, rotor=Rotor(speed=rpm * math.pi / 30.0, blades=nb,

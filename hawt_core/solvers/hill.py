@@ -44,8 +44,8 @@ TAIL_TOL = 1e-12
 #: Largest harmonic truncation tried.
 MAX_HARMONICS = 48
 #: Truncation rules of hill_modes: "tail" (the outermost harmonics of every kept vector hold
-#: at most tail_tol of its energy) or "converged" (H = 1, 2, ...: every exponent moved by at
-#: most converged_tol x w from H - 1 to H).
+#: at most tail_tol of its energy) or "converged" (H = 0, 1, 2, ...: every exponent moved by
+#: at most converged_tol, relative to max(|eta|, w), from H - 1 to H).
 TRUNCATIONS = ("tail", "converged")
 #: Default of "converged": relative exponent change, |eta_H - eta_{H-1}| / max(|eta|, w),
 #: between two truncations that stops the growth (H = 0, 1, 2, ...).  The change is the
@@ -266,8 +266,8 @@ def hill_modes(dae: LinearPeriodicDAE, max_frequency: float, harmonics: Optional
     harmonics above 1e-3 of the largest, grown by half while a kept vector holds more than
     ``tail_tol`` of its energy in the outermost harmonics |k| = H; measured on the paper's
     turbine, the relative exponent error is about sqrt(tail)/10 there).  ``truncation=
-    "converged"`` instead grows H = 1, 2, 3, ... until no exponent moves by more than
-    ``converged_tol * w`` (the same count of exponents at both H): for weakly periodic
+    "converged"`` instead grows H = 0, 1, 2, ... until no exponent moves by more than
+    ``converged_tol`` relative to max(|eta|, w) (see _exponent_change): for weakly periodic
     systems (an isotropic rotor's multi-blade coordinates, whose periodicity is only gravity
     and tilt), where the tail of a vector mixed by a near-resonance stays large although its
     exponent has converged (NREL 5-MW: tail 2.6e-2 at H = 1, exponents already within 3e-8 w
@@ -338,7 +338,6 @@ def hill_modes(dae: LinearPeriodicDAE, max_frequency: float, harmonics: Optional
                               f"{converged_tol:.0e})", RuntimeWarning, stacklevel=2)
         elif H == 0 or tails.size == 0 or tails.max() <= tail_tol or \
                 attempt == len(H_list) - 1:
-            change = None
             if H and tails.size and tails.max() > tail_tol:
                 warnings.warn(f"Hill's method: the outermost of {H} harmonics still holds "
                               f"{tails.max():.1e} of a mode's energy (tolerance "
@@ -351,7 +350,7 @@ def hill_modes(dae: LinearPeriodicDAE, max_frequency: float, harmonics: Optional
                                   "eigen": time.perf_counter() - t1,
                                   "factorizations": stats.get("factorizations", 0)},
                          solves=stats.get("solves", 0),
-                         change=None if truncation == "tail" or H == 0 else change)
+                         change=change)
     raise HillError("Hill's method: no truncation tried")  # pragma: no cover
 
 
