@@ -58,6 +58,12 @@ class SectionTable:
         tension_offset: (x2, x3) of the tension centre (where EA acts) [m], shape (ns, 2).
         stiffness_6x6 / mass_6x6: optional full matrices, shape (ns, 6, 6), in frame b; when
             given they replace the matrices built from the scalar properties above.
+        prebend, sweep: offsets of the reference line from the straight b1 axis along b3
+            (prebend, out of the plane of rotation, downwind positive) and b2 (sweep, in
+            the plane of rotation, towards the direction of motion) [m]; None = straight.
+            The stations are then fractions of the span along b1, the section properties
+            are per unit length of the curved line and act in its local section frame
+            (b turned to the line's tangent, fem/sections.py: mesh_beam).
     """
 
     stations: np.ndarray
@@ -76,11 +82,13 @@ class SectionTable:
     tension_offset: Optional[np.ndarray] = None
     stiffness_6x6: Optional[np.ndarray] = None
     mass_6x6: Optional[np.ndarray] = None
+    prebend: Optional[np.ndarray] = None
+    sweep: Optional[np.ndarray] = None
 
     def __post_init__(self):
         for name in ("stations", "mass", "i1", "i2", "i3", "gj", "ei2", "ei3"):
             object.__setattr__(self, name, _frozen_array(getattr(self, name), 1))
-        for name in ("ea", "ga2", "ga3", "twist"):
+        for name in ("ea", "ga2", "ga3", "twist", "prebend", "sweep"):
             if getattr(self, name) is not None:
                 object.__setattr__(self, name, _frozen_array(getattr(self, name), 1))
         for name in ("cg_offset", "tension_offset"):

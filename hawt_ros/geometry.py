@@ -64,12 +64,17 @@ class RotorGeometry:
     def blade_points(self, named: dict, t: float, stations, u, frame: str = "nacelle",
                      frames=None) -> np.ndarray:
         """Deformed reference-line points of every blade, (Nb, S, 3), in ``frame``
-        ('nacelle' or 'hub'). ``stations`` (Nb, S) span coordinates [m], ``u`` (Nb, S, 3)
-        displacements in the root frames. ``frames``: as for :meth:`loads`."""
+        ('nacelle' or 'hub'). ``stations`` (Nb, S) span coordinates [m] of a straight
+        blade, or (Nb, S, 3) undeformed reference-line points in the root frames (a prebent
+        or swept blade); ``u`` (Nb, S, 3) displacements in the root frames. ``frames``: as
+        for :meth:`loads`."""
         st = np.asarray(stations, float)
         u = np.asarray(u, float)
         local = u.copy()
-        local[..., 0] += st                                # b1 span + displacement, in b
+        if st.ndim == u.ndim:
+            local += st                                    # line point + displacement, in b
+        else:
+            local[..., 0] += st                            # b1 span + displacement, in b
         rih = self.rigid.root_in_hub                      # (Nb, 3, 3) b in h
         p_h = np.einsum("kij,ksj->ksi", rih, local) + self.rigid.root_offset_hub[:, None, :]
         if frame == "hub":

@@ -116,8 +116,10 @@ class Simulator:
             u[:, 1] = -0.01 * x ** 2 * (1 + 0.1 * math.cos(ph))
             th = np.zeros((len(x), 3))
             th[:, 1] = -0.1 * x * (1 + 0.2 * math.sin(ph))
-            out.append({"stations": self.stations.copy(), "u": u, "theta": th,
-                        "root_force": np.array([1.2e5, 100.0 * math.sin(ph), 500.0]),
+            line = np.zeros((len(x), 3))
+            line[:, 0] = self.stations
+            out.append({"stations": self.stations.copy(), "positions": line, "u": u,
+                        "theta": th, "root_force": np.array([1.2e5, 100.0 * math.sin(ph), 500.0]),
                         "root_moment": np.array([10.0, -2000.0 * math.cos(ph), 300.0])})
         return out
 

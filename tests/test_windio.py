@@ -83,7 +83,14 @@ def test_windio_blade_is_the_beamdyn_blade_written_from_it(iea15, tmp_path):
         bd = read_openfast(fst).turbine.blade
     w = iea15.turbine.blade
     assert w.length == pytest.approx(bd.length, rel=1e-12)
+    # the same stations (WindIO's grid: its axis curves' parameter, here z / L; BeamDyn's
+    # eta read as the span fraction along kp_zr) and the same curved line (x: prebend)
     np.testing.assert_allclose(w.sections.stations, bd.sections.stations, atol=1e-12)
+    assert w.sections.prebend[-1] == pytest.approx(-4.0, rel=1e-9)
+    # (PCHIP through the key points, which sample the curve elsewhere than WindIO's
+    # grid: 1.5 mm apart at most, of 4 m)
+    np.testing.assert_allclose(bd.sections.prebend, w.sections.prebend, atol=2e-3)
+    np.testing.assert_array_equal(w.sections.sweep, 0.0)
     for name in ("stiffness_6x6", "mass_6x6"):
         a, b = getattr(w.sections, name), getattr(bd.sections, name)
         # twist: WindIO's outer_shape.twist vs BeamDyn's key points (agree to 5e-5 deg)
@@ -195,7 +202,10 @@ def test_blade_rigidities_land_where_an_euler_bernoulli_solution_puts_them(iea15
     for name in ("K11", "K22", "K33"):
         k[name] = [1e3 * v for v in k[name]]
     m["cm_x"] = m["cm_y"] = m["i_cp"] = [0.0] * x.size
+    ra = e["reference_axis"]                              # and straight (no prebend)
+    ra["x"] = {"grid": [0.0, 1.0], "values": [0.0, 0.0]}
     stiff = replace(t, blade=read(write(tmp_path, data)).turbine.blade)
+    assert stiff.blade.sections.prebend is None
 
     def flap_lag(turbine, n):
         r = blade_modes(turbine, elements=n, rotor_speed=0.0, count=8)
@@ -223,7 +233,10 @@ def test_round_trip_windio_to_hawt_yaml_and_back(path, tmp_path):
 
 def test_nothing_read_is_dropped_silently(iea15):
     text = "\n".join(iea15.warnings)
-    for words in ("reference_axis.x, .y (prebend", "components.monopile", "airfoils",
+    assert "prebend" not in text                  # modelled now: a note says from where
+    assert any("prebend and sweep from components.blade.reference_axis.x" in n
+               for n in iea15.notes)
+    for words in ("components.monopile", "airfoils",
                   "control: min_rotor_speed", "components.hub: flange_t2shell_t",
                   "generator.mass", "components.blade.structure: webs, layers",
                   "components.tower: outer_shape", "inertia products"):

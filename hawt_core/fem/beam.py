@@ -24,6 +24,19 @@ Residual rows in the same block order:
     [node-0 equilibrium (force, moment), node-0 kinematics (u, theta),
      (element-e strain-displacement (u, theta), node-e equilibrium, node-e kinematics) ...]
 All arithmetic is complex-safe (complex-step Jacobians).
+
+Curved reference line (prebend, sweep: fem/sections.py mesh_beam): a polygon of straight
+elements, element e with the constant section frame ``A_e`` (columns a1 along the element).
+As in GXBeam, ``theta`` parametrizes the rotation of the section *from its undeformed
+orientation* (so it is continuous through the kinks and zero at the clamp), and every
+section vector is carried in the frame ``b`` turned by that rotation, ``x* = A_e x_B``:
+there the element's equations are those above with ``e1`` replaced by the element's
+tangent ``t_e = A_e e1``, the reference position ``x1 e1`` by the point of the polygon, and
+the section matrices turned, ``R* = A R A^T`` and ``mu* = A mu A^T`` (A = diag(A_e, A_e);
+cross products are invariant under the common rotation).  The nodal ``V, Omega`` and the
+element ``F, M`` unknowns are in these components; at the root (theta = 0) they are root
+frame components, so the coupling to the hub is unchanged, and a straight beam
+(``A_e = I``) is exactly the formulation above.
 """
 from __future__ import annotations
 
@@ -61,18 +74,29 @@ class BeamElements:
         self.eta = 0.5 * (xg + 1.0)  # (G,)
         self.w = 0.5 * wg            # (G,), sum 1
         h = props.h
+        frames = props.element_frames()
+        #: element tangents t_e (N, 3) and Gauss-point positions (N, G, 3) in b [m]
+        self.tangent = np.ascontiguousarray(frames[:, :, 0])
+        pos = props.node_positions()
+        self.points = (pos[:-1, None, :] * (1 - self.eta)[None, :, None]
+                       + pos[1:, None, :] * self.eta[None, :, None])
+        A6 = np.zeros((self.N, 6, 6))
+        A6[:, :3, :3] = A6[:, 3:, 3:] = frames
+        turn = lambda S: A6 @ S @ A6.transpose(0, 2, 1)   # section frame -> turned-b frame
         # weights for the two hat functions of each element at the Gauss points: (N, G)
         self.wa = h[:, None] * (self.w * (1 - self.eta))[None, :]
         self.wb = h[:, None] * (self.w * self.eta)[None, :]
         self.xg = props.nodes[:-1, None] + h[:, None] * self.eta[None, :]  # (N, G)
         self.h = h
-        mu = props.mass
+        mu = turn(props.mass) if props.curved else props.mass
         self.m_vv, self.m_vo = mu[:, :3, :3], mu[:, :3, 3:]
         self.m_ov, self.m_oo = mu[:, 3:, :3], mu[:, 3:, 3:]
         self.mass_per_length = mu[:, 0, 0]
         # m * xi (mass-centre offset times mass), read off mu_ov = m xi~ (for gravity moments)
         self.m_xi = np.stack([mu[:, 5, 1], mu[:, 3, 2], mu[:, 4, 0]], -1)
-        self.R = props.compliance
+        #: compliance (N, 6, 6) acting on the F, M unknowns (turned-b components)
+        self.R = turn(props.compliance) if props.curved else props.compliance
+        self.mass = mu
         self.differential = self._differential_mask()
         self._precompute()
 
@@ -101,7 +125,7 @@ class BeamElements:
     # ------------------------------------------------------------------ residual
     def _precompute(self):
         """Constant operators of the fused residual (see :meth:`residual`)."""
-        N, G = self.N, len(self.eta)
+        N = self.N
         n = self.n
         # rows: the G Gauss-point interpolations and the element difference (right - left)
         self._Lg = np.vstack([np.stack([1 - self.eta, self.eta], -1), [[-1.0, 1.0]]])
@@ -121,16 +145,16 @@ class BeamElements:
         self._gather = idx.reshape(N, 48)
         self._fm_idx = (ROOT_SIZE + BLOCK_SIZE * np.arange(N)[:, None]
                         + np.arange(6)[None, :])                   # (N, 6) of F, M
-        self._muT = np.ascontiguousarray(self.props.mass.transpose(0, 2, 1))
+        self._muT = np.ascontiguousarray(self.mass.transpose(0, 2, 1))
         self._RT = np.ascontiguousarray(self.R.transpose(0, 2, 1))  # (N, 6, 6)
-        self._XE1 = np.zeros((N, G, 1, 3))
-        self._XE1[..., 0, 0] = self.xg
+        self._X0 = self.points[:, :, None, :]                      # (N, G, 1, 3)
         self._mxi4 = self.m_xi[:, None, None, :, None]            # (N, 1, 1, 3, 1)
         self._mpl = self.mass_per_length[:, None, None, None]
         self._halfh = 0.5 * self.h[:, None, None]
         self._sgn3 = np.array([1.0, 1.0, -1.0])[:, None]
         self._sgn4 = np.array([1.0, 1.0, -1.0, -1.0])[:, None]
-        self._e1 = np.array([1.0, 0.0, 0.0])
+        self._t = self.tangent[:, None, :]                         # (N, 1, 3)
+        self._t4 = self.tangent[:, None, None, :]                  # (N, 1, 1, 3)
 
     def residual(self, yd, y, v, w, g=None, tip_force=None, tip_moment=None):
         """Residual (B, n) of B beams.
@@ -139,7 +163,8 @@ class BeamElements:
         v, w: (B, 3) inertial velocity of the root point and angular velocity of the root
             frame, in the root frame b [m/s, rad/s].
         g: (B, 3) gravity vector in the root frame [m/s^2] or None.
-        tip_force, tip_moment: (B, 3) loads applied at the tip, in the tip section frame B.
+        tip_force, tip_moment: (B, 3) loads applied at the tip, in the tip section frame B
+            (for a curved beam: b turned by the tip's rotation theta).
 
         Fused implementation (about 70 NumPy calls whatever B and N, every product a single
         BLAS call or N of them): Gauss-point arrays are laid out (element, Gauss point, beam,
@@ -179,7 +204,7 @@ class BeamElements:
         FM = y[:, self._fm_idx].transpose(1, 0, 2)              # (N, B, 6)
         strain = FM @ self._RT                                  # (N, B, 6)
         gam, kap = strain[..., :3], strain[..., 3:]
-        e1g = gam + self._e1                                    # e1 + gamma
+        e1g = gam + self._t                                     # t_e + gamma (e1 + gamma)
         FM2 = FM.reshape(N, B, 2, 3)
         kFM = cross(kap[:, :, None, :, None], FM2[..., None, :], (N, B, 2, 3))
         eF = cross(e1g[..., :, None], FM[..., None, 0:3], (N, B, 3))
@@ -226,10 +251,10 @@ class BeamElements:
             t[..., 0:3] -= self._mpl * gB
             t[..., 3:6] -= cross(self._mxi4, gB[..., None, :], gB.shape)
         np.negative(t, out=I[..., 0:6])
-        wxp = cross(w[:, :, None], (ug + self._XE1)[..., None, :], (N, G, B, 3))
+        wxp = cross(w[:, :, None], (ug + self._X0)[..., None, :], (N, G, B, 3))
         I[..., 6:9] = (udg - rT[..., 0, :]) + v + wxp
         np.subtract(thdg, q[..., 0, :], out=I[..., 9:12])
-        np.subtract(rT[..., 1, :], self._e1, out=I[..., 12:15])
+        np.subtract(rT[..., 1, :], self._t4, out=I[..., 12:15])
         I[..., 15:18] = q[..., 1, :]
         S = (self._W3 @ I.reshape(N, G, -1)).reshape(N, 3, B, 18)
 
@@ -270,8 +295,7 @@ class BeamElements:
         """Unknowns (n,) of one undeformed beam in rigid motion (v, w constant, real), with the
         section forces left at zero: a starting guess for steady-state Newton iterations."""
         y = np.zeros(self.n)
-        x = self.props.nodes
-        Vn = v[None, :] + np.cross(w[None, :], np.stack([x, 0 * x, 0 * x], -1))
+        Vn = v[None, :] + np.cross(w[None, :], self.props.node_positions())
         y[ROOT_V] = Vn[0]
         y[ROOT_OM] = w
         blk = y[ROOT_SIZE:].reshape(self.N, BLOCK_SIZE)

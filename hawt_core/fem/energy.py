@@ -48,6 +48,8 @@ def classify_energy(beam: BeamElements, x: np.ndarray) -> np.ndarray:
     """Strain energy of an eigenvector ``x`` (one beam) by direction
     [axial, shear2, shear3, torsion, flap, lag] (compliance-weighted section loads)."""
     _, _, _, _, F, M = beam.nodal(x[None])
-    FM = np.concatenate([F[0], M[0]], -1)            # (N, 6) complex
-    strain = np.einsum("nij,nj->ni", beam.R, FM)
+    A = beam.props.element_frames()                  # loads back to the section frames
+    FM = np.concatenate([np.einsum("nji,nj->ni", A, F[0]),
+                         np.einsum("nji,nj->ni", A, M[0])], -1)     # (N, 6) complex
+    strain = np.einsum("nij,nj->ni", beam.props.compliance, FM)
     return (beam.h[:, None] * np.real(np.conj(FM) * strain)).sum(0)

@@ -15,11 +15,13 @@ interpolated mass matrix.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Optional
 
 import numpy as np
+from scipy.interpolate import CubicSpline
 
 from ..model import Beam, SectionTable
-from ..numerics.rotations import rot1, skew
+from ..numerics.rotations import rot1, skew, turn_e1_to
 
 
 def station_compliance(t: SectionTable) -> np.ndarray:
@@ -131,22 +133,72 @@ def element_compliance(t: SectionTable, length: float, nodes: np.ndarray,
 class ElementProperties:
     """Per-element data of a meshed beam.
 
-    nodes: span coordinates of the N+1 nodes [m]; h: element lengths (N,) [m];
-    compliance: (N, 6, 6); mass: (N, 6, 6).
+    nodes: span coordinates of the N+1 nodes along b1 [m] (what the section stations are
+    fractions of); h: element lengths (N,) [m]; compliance: (N, 6, 6) and mass: (N, 6, 6)
+    in each element's section frame (untwisted).
+    A curved reference line (prebend, sweep) is a polygon of straight elements:
+    ``positions`` (N+1, 3) of the nodes in the root frame b [m] and ``frames`` (N, 3, 3),
+    the element section frames a (columns: a1 along the element, a2, a3) in b.  None
+    means the straight line along b1: positions (nodes, 0, 0), frames the identity.
     """
 
     nodes: np.ndarray
     h: np.ndarray
     compliance: np.ndarray
     mass: np.ndarray
+    positions: Optional[np.ndarray] = None
+    frames: Optional[np.ndarray] = None
 
     @property
     def n_elements(self) -> int:
         return len(self.h)
 
+    @property
+    def curved(self) -> bool:
+        return self.frames is not None
+
+    def node_positions(self) -> np.ndarray:
+        """(N+1, 3) undeformed node positions in the root frame b [m]."""
+        if self.positions is not None:
+            return np.asarray(self.positions, float)
+        x = np.asarray(self.nodes, float)
+        return np.stack([x, 0 * x, 0 * x], -1)
+
+    def element_frames(self) -> np.ndarray:
+        """(N, 3, 3) element section frames in b (the identity for a straight beam)."""
+        if self.frames is not None:
+            return np.asarray(self.frames, float)
+        return np.broadcast_to(np.eye(3), (self.n_elements, 3, 3))
+
+
+def reference_line(t: SectionTable, length: float, x: np.ndarray) -> Optional[np.ndarray]:
+    """Points (len(x), 3) of the reference line in the root frame b [m] at the span
+    coordinates ``x`` [m] along b1: ``(x, sweep(x), prebend(x))``, the offsets interpolated
+    by a not-a-knot cubic spline through the stations (so that a refined mesh follows a
+    smooth line, not the station polygon; two stations give a straight line); None when
+    the table has neither prebend nor sweep."""
+    if t.prebend is None and t.sweep is None:
+        return None
+    st = t.stations * length
+    out = np.zeros((len(x), 3))
+    out[:, 0] = x
+    for col, off in ((1, t.sweep), (2, t.prebend)):
+        if off is None or not np.any(off):
+            continue
+        spline = CubicSpline(st, off) if len(st) > 2 else (
+            lambda z, o=off: np.interp(z, st, o))
+        out[:, col] = spline(x)
+    return out
+
 
 def mesh_beam(beam: Beam, elements: int | None = None) -> ElementProperties:
-    """Uniform mesh of ``elements`` (default ``beam.elements``) with averaged properties."""
+    """Uniform mesh of ``elements`` (default ``beam.elements``) with averaged properties.
+
+    With prebend or sweep, the nodes sit on the reference line at equal spacing along b1;
+    each element is the straight chord between its nodes (length ``h``), its section frame
+    the smallest rotation of b turning b1 onto the chord (docs/theory.md, "Curved
+    reference line"): the polygon converges to the line at second order, like the
+    elements themselves."""
     n = int(beam.elements if elements is None else elements)
     if n < 1:
         raise ValueError(f"elements: {n} is not allowed; need an integer >= 1")
@@ -154,4 +206,13 @@ def mesh_beam(beam: Beam, elements: int | None = None) -> ElementProperties:
     st = beam.sections.stations * beam.length
     comp = element_compliance(beam.sections, beam.length, nodes)
     mass = element_average(st, station_mass(beam.sections), nodes)
-    return ElementProperties(nodes=nodes, h=np.diff(nodes), compliance=comp, mass=mass)
+    pos = reference_line(beam.sections, beam.length, nodes)
+    if pos is None:
+        return ElementProperties(nodes=nodes, h=np.diff(nodes), compliance=comp, mass=mass)
+    chord = np.diff(pos, axis=0)
+    h = np.linalg.norm(chord, axis=1)
+    frames = turn_e1_to(chord / h[:, None])
+    # the section tables give properties per unit length of the line: the element's
+    # chord carries them (the projected length along b1 would shorten it)
+    return ElementProperties(nodes=nodes, h=h, compliance=comp, mass=mass, positions=pos,
+                             frames=frames)

@@ -15,7 +15,7 @@ import numpy as np
 
 __all__ = ["ImportResult", "ELEMENTS", "IEC_TO_HAWT", "package_version",
            "iec_axes_to_hawt", "untwist_sections", "sections_from_matrices",
-           "interp_stations", "hub_yaw_share"]
+           "interp_stations", "hub_yaw_share", "BladeAxis"]
 
 
 def package_version(dist: str) -> str:
@@ -76,15 +76,64 @@ def hub_yaw_share(hub, tilt: float, along: float) -> float:
                  + hub.mass * (along * ct) ** 2)
 
 
-def sections_from_matrices(stations, K: np.ndarray, M: np.ndarray):
+class BladeAxis:
+    """A blade's reference axis from another tool's file, in hawt's blade axes.
+
+    ``points`` (K, 3): the axis in the IEC blade frame (x towards the suction side, i.e.
+    downwind; y towards the trailing edge; z along the pitch axis), root first;
+    ``parameter`` (K,): the coordinate the file's section stations refer to at those
+    points, 0 at the root and 1 at the tip (None: the polyline's normalized arc length).
+    hawt's blade frame has b1 = z, b2 = -y, b3 = x (IEC_TO_HAWT), so the prebend (along b3)
+    is x and the sweep (along b2) is -y, both from the root point.
+    """
+
+    def __init__(self, points, parameter=None):
+        p = np.asarray(points, float)
+        p = (p - p[0]) @ IEC_TO_HAWT.T
+        if parameter is None:
+            seg = np.linalg.norm(np.diff(p, axis=0), axis=1)
+            parameter = np.concatenate([[0.0], np.cumsum(seg)]) / seg.sum()
+        self.parameter = np.asarray(parameter, float)
+        self.points = p
+        #: span along b1 [m]
+        self.length = float(p[-1, 0])
+
+    @property
+    def curved(self) -> bool:
+        return bool(np.any(self.points[:, 1:] != 0))
+
+    def stations(self, s):
+        """hawt's station fractions (of the span along b1) and the (sweep, prebend) [m] at
+        the file's station coordinates ``s``: PCHIP along the axis (as WindIO asks), so
+        the line between its points stays smooth and never overshoots."""
+        from scipy.interpolate import PchipInterpolator
+
+        s = np.asarray(s, float)
+        if len(self.parameter) > 2:
+            at = PchipInterpolator(self.parameter, self.points, axis=0)(s)
+        else:
+            at = np.stack([np.interp(s, self.parameter, self.points[:, j])
+                           for j in range(3)], -1)
+        if np.allclose(self.points[:, 0] / self.length, self.parameter, rtol=0, atol=1e-14):
+            span = s.copy()        # the parameter is the span fraction: exactly the file's
+        else:
+            span = at[:, 0] / self.length
+            span[s <= self.parameter[0]] = 0.0      # root and tip exactly (the end stations
+            span[s >= self.parameter[-1]] = 1.0     # of the format), not to round-off
+        return span, at[:, 1], at[:, 2]
+
+
+def sections_from_matrices(stations, K: np.ndarray, M: np.ndarray, prebend=None,
+                           sweep=None):
     """A SectionTable from full 6x6 stiffness and mass matrices in hawt's untwisted blade
-    frame (the scalar properties are their diagonals, as the turbine loader derives them)."""
+    frame (the scalar properties are their diagonals, as the turbine loader derives them),
+    with the reference line's ``prebend`` and ``sweep`` [m] (None: straight)."""
     from ..model import SectionTable
 
     return SectionTable(stations=stations, mass=M[:, 0, 0], i1=M[:, 3, 3], i2=M[:, 4, 4],
                         i3=M[:, 5, 5], ea=K[:, 0, 0], ga2=K[:, 1, 1], ga3=K[:, 2, 2],
                         gj=K[:, 3, 3], ei2=K[:, 4, 4], ei3=K[:, 5, 5],
-                        stiffness_6x6=K, mass_6x6=M)
+                        stiffness_6x6=K, mass_6x6=M, prebend=prebend, sweep=sweep)
 
 
 @dataclass

@@ -41,7 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from ..model import Beam, Drivetrain, Gravity, Hub, Nacelle, Rotor, SectionTable, Turbine
-from .imported import (ELEMENTS, ImportResult, hub_yaw_share, iec_axes_to_hawt,
+from .imported import (ELEMENTS, BladeAxis, ImportResult, hub_yaw_share, iec_axes_to_hawt,
                        interp_stations, package_version, sections_from_matrices,
                        untwist_sections)
 from .turbine_yaml import TurbineFileError
@@ -290,17 +290,24 @@ def _blade_beamdyn(deck: _Deck, comp: dict, nb: int):
     if not length > 0:
         raise TurbineFileError(str(bd_main), [f"kp_zr: the key points must run outward "
                                               f"along z (got {kp[0, 2]} .. {kp[-1, 2]} m)"])
-    stations = np.asarray(blade["radial_stations"], float)
+    eta = np.asarray(blade["radial_stations"], float)
     K = iec_axes_to_hawt(blade["beam_stiff"])
     M = iec_axes_to_hawt(blade["beam_inertia"])
+    # BeamDyn's key-point splines are functions of kp_zr: the stations eta are read as
+    # fractions of the span along z (hawt's b1), as WISDEM writes them from WindIO's grid
+    # (tests/test_windio.py); the line's x, -y offsets are hawt's prebend and sweep
+    axis = BladeAxis(kp[:, :3], (kp[:, 2] - kp[0, 2]) / length)
+    stations, sweep, prebend = axis.stations(eta)
     # section twist at the stations from the key points (towards feather -> minus hawt's)
-    twist = -np.radians(np.interp(stations * length + kp[0, 2], kp[:, 2], kp[:, 3]))
+    twist = -np.radians(np.interp(eta, axis.parameter, kp[:, 3]))
     damp = blade.get("damp_type")
     if damp:
         deck.warnings.append(f"{Path(deck.sources['BeamDyn blade']).name}: damp_type = "
                              f"{damp} (structural damping) read but not modelled")
     return dict(stations=stations, K=K, M=M, twist=twist, length=length, file=bd_main,
-                curve=float(np.abs(kp[:, :2]).max()))
+                curve=float(np.abs(kp[:, :2] - kp[0, :2]).max()),
+                prebend=prebend if axis.curved else None,
+                sweep=sweep if axis.curved else None)
 
 
 def _blade(deck: _Deck, comp: dict, ed_file: Path, nb: int, length: float) -> Beam:
@@ -311,13 +318,15 @@ def _blade(deck: _Deck, comp: dict, ed_file: Path, nb: int, length: float) -> Be
                                  f"(kp_zr) differs from TipRad - HubRad = {length:.4g} m; "
                                  "the BeamDyn length is used")
         if bd["curve"] > 0:
-            deck.warnings.append(
-                f"{bd['file'].name}: kp_xr, kp_yr (prebend/sweep up to {bd['curve']:.3g} m) "
-                "read but not modelled yet: hawt uses a straight reference line along kp_zr")
+            deck.notes.append(
+                f"blade: prebend and sweep from the key points kp_xr, -kp_yr (up to "
+                f"{bd['curve']:.3g} m; a curved reference line, the stations eta taken as "
+                "fractions of the span along kp_zr)")
         deck.notes.append("blade: the full 6x6 stiffness and mass of the BeamDyn blade "
                           "(CompElast = 2), turned by the initial twist into hawt's blade frame")
         sec = sections_from_matrices(bd["stations"], untwist_sections(bd["K"], bd["twist"]),
-                                     untwist_sections(bd["M"], bd["twist"]))
+                                     untwist_sections(bd["M"], bd["twist"]),
+                                     prebend=bd["prebend"], sweep=bd["sweep"])
         return Beam(length=bd["length"], sections=sec, elements=ELEMENTS["blade"])
 
     # ElastoDyn blade (CompElast = 1)

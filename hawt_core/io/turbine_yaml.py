@@ -146,7 +146,10 @@ MASS_PROPS = ("mass", "i1", "i2", "i3")          # replaced by mass_6x6 ...
 MASS_DIAGONAL = (0, 3, 4, 5)                     # ... diagonal entries holding them
 STIFF_PROPS = ("ea", "ga2", "ga3", "gj", "ei2", "ei3")  # replaced by stiffness_6x6 diagonal
 _SECTIONS = dict({"stations": True}, **{k: False for k in SCALAR_PROPS},
-                 cg_offset=False, tension_offset=False, stiffness_6x6=False, mass_6x6=False)
+                 cg_offset=False, tension_offset=False, stiffness_6x6=False, mass_6x6=False,
+                 prebend=False, sweep=False)
+#: Offsets of a curved reference line, per station [m] (blades only).
+LINE_PROPS = ("prebend", "sweep")
 
 _RULES = {
     "> 0": "must be > 0",
@@ -474,7 +477,8 @@ class _Checker:
 # --------------------------------------------------------------------------------------------
 # Building the model.
 
-def _section_table(c: _Checker, value: Any, path: str) -> Optional[SectionTable]:
+def _section_table(c: _Checker, value: Any, path: str,
+                   curved_line: bool = True) -> Optional[SectionTable]:
     d = c.mapping(value, path, _SECTIONS)
     if d is None:
         return None
@@ -498,6 +502,18 @@ def _section_table(c: _Checker, value: Any, path: str) -> Optional[SectionTable]
     for key in ("cg_offset", "tension_offset"):
         if d.get(key) is not None:
             props[key] = c.pairs(d[key], f"{path}.{key}", ns)
+    for key in LINE_PROPS:
+        if d.get(key) is None:
+            continue
+        if not curved_line:
+            c.error(f"{path}.{key}", "is not supported here: the tower's reference line is "
+                                     "straight (its top carries the nacelle)", d[key])
+            continue
+        props[key] = c.per_station(d[key], f"{path}.{key}", ns, "finite")
+        if props[key] is not None and props[key][0] != 0:
+            c.error(f"{path}.{key}[0]", "must be 0: the reference line starts at the blade "
+                                        "root (the root point is set by the hub)",
+                    props[key][0])
     if has_m and d.get("cg_offset") is not None:
         c.error(f"{path}.cg_offset", "cannot be combined with mass_6x6 (the matrix already "
                                      "holds the mass-centre offset)", d["cg_offset"])
@@ -546,7 +562,8 @@ def _beam(c: _Checker, value: Any, path: str, spec: dict) -> Optional[Beam]:
         return None
     length = c.number(d, "length", path, "> 0")
     elements = c.integer(d, "elements", path, 1)
-    sections = _section_table(c, d["sections"], f"{path}.sections") if "sections" in d else None
+    sections = (_section_table(c, d["sections"], f"{path}.sections", path != "tower")
+                if "sections" in d else None)
     if None in (length, elements, sections):
         return None
     return Beam(length=length, sections=sections, elements=elements)

@@ -4,8 +4,9 @@
 What is read (WindIO 2.x; angles in degrees, rotor speeds in rpm, SI otherwise), under
 ``components``:
 
-- ``blade``: ``reference_axis`` (its z extent is the blade length; x, y are prebend and
-  sweep), ``outer_shape.twist``, ``structure.elastic_properties``: the 6x6 stiffness
+- ``blade``: ``reference_axis`` (its z extent is the blade length; x and -y are the
+  prebend and sweep of a curved reference line; the section grids are the axis curves'
+  parameter, so a station s sits at the axis point of parameter s), ``outer_shape.twist``, ``structure.elastic_properties``: the 6x6 stiffness
   (``stiffness_matrix`` K11..K66) and the mass matrix built from ``inertia_matrix`` (mass,
   cm_x, cm_y, i_edge, i_flap, i_plr, i_cp), both in the twisted section frame;
 - ``hub``: diameter (blade-root radius), cone_angle (precone), ``elastic_properties``
@@ -36,7 +37,7 @@ and along the tilted shaft in hawt (``overhang / cos(tilt)``); the height of the
 crossing with the yaw axis above the tower top is ``distance_tt_hub - overhang tan(tilt)``.
 
 What hawt cannot honour is refused naming the key; what is read but not modelled (aerodynamic
-shape and airfoils, controller, structural damping, prebend and sweep, the monopile or
+shape and airfoils, controller, structural damping, the monopile or
 floater, products of inertia, the hub's mass-centre offset) is a warning, never dropped.
 """
 from __future__ import annotations
@@ -47,7 +48,7 @@ from pathlib import Path
 import numpy as np
 
 from ..model import Beam, Drivetrain, Gravity, Hub, Nacelle, Rotor, SectionTable, Turbine
-from .imported import (ELEMENTS, ImportResult, hub_yaw_share, iec_axes_to_hawt,
+from .imported import (ELEMENTS, BladeAxis, ImportResult, hub_yaw_share, iec_axes_to_hawt,
                        interp_stations, package_version, sections_from_matrices,
                        untwist_sections)
 from .turbine_yaml import TurbineFileError
@@ -242,15 +243,20 @@ def _blade(f: _File) -> Beam:
                            "and inertia); a blade given only by its layup (structure.layers) "
                            "needs a cross-section solver first (e.g. WISDEM's PreComp)")
     ref = "components.blade.reference_axis"
-    _, z = f.curve(f"{ref}.z")
-    length = float(z[-1] - z[0])
-    if not length > 0:
-        raise f.error(f"{ref}.z.values", f"{z[0]} .. {z[-1]} m: must run outward (tip > root)")
-    bend = max(float(np.abs(f.curve(f"{ref}.{a}")[1]).max()) for a in ("x", "y"))
+    curves = {a: f.curve(f"{ref}.{a}") for a in ("x", "y", "z")}
+    z = curves["z"][1]
+    if not np.all(np.diff(z) > 0):
+        raise f.error(f"{ref}.z.values", f"{z[0]} .. {z[-1]} m: must run outward (tip > root), "
+                                         "strictly increasing")
+    # the axis at its points, on the grid the section properties are given on
+    grid = np.union1d(*(np.union1d(curves[a][0], curves["z"][0]) for a in ("x", "y")))
+    axis = BladeAxis(np.stack([np.interp(grid, *curves[a]) for a in ("x", "y", "z")], -1),
+                     grid)
+    length = axis.length
+    bend = float(np.abs(axis.points[:, 1:]).max())
     if bend > 0:
-        f.warnings.append(f"{f.path.name}: {ref}.x, .y (prebend and sweep up to {bend:.3g} m) "
-                          "read but not modelled yet: hawt uses a straight reference line "
-                          "along z")
+        f.notes.append(f"blade: prebend and sweep from {ref}.x, -{ref}.y (up to {bend:.3g} m;"
+                       " a curved reference line)")
     sk, st = f"{key}.stiffness_matrix", f"{key}.inertia_matrix"
     gk, gm = f.grid(f"{sk}.grid"), f.grid(f"{st}.grid")
     stations = np.union1d(gk, gm)
@@ -292,8 +298,10 @@ def _blade(f: _File) -> Beam:
     f.notes.append("blade: the 6x6 stiffness and the mass matrix of "
                    f"{key} (IEC section frame, turned by outer_shape.twist into hawt's "
                    "blade frame)")
-    sec = sections_from_matrices(stations, untwist_sections(K, twist),
-                                 untwist_sections(M, twist))
+    span, sweep, prebend = axis.stations(stations)
+    sec = sections_from_matrices(span, untwist_sections(K, twist), untwist_sections(M, twist),
+                                 prebend=prebend if axis.curved else None,
+                                 sweep=sweep if axis.curved else None)
     return Beam(length=length, sections=sec, elements=ELEMENTS["blade"])
 
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["LEVI_CIVITA_9", "cross", "dot", "matvec", "skew", "rot1", "rot2", "rot3",
-           "tip_basis", "rot_apply", "rot_T_apply", "q_apply"]
+           "turn_e1_to", "tip_basis", "rot_apply", "rot_T_apply", "q_apply"]
 
 
 def _levi_civita_9() -> np.ndarray:
@@ -81,6 +81,21 @@ def rot2(a) -> np.ndarray:
 def rot3(a) -> np.ndarray:
     """Right-handed rotation by ``a`` about axis 3; columns = turned basis in the old one."""
     return _rotation(2, a)
+
+
+def turn_e1_to(d) -> np.ndarray:
+    """The smallest rotations (..., 3, 3) that turn ``e1`` onto the unit vectors ``d``
+    (..., 3): about the axis ``e1 x d``, so a direction normal to both stays put (the
+    section frame of a bent reference line, with no twist about it); columns = the turned
+    basis in the old one.  ``d = -e1`` is refused (the axis is undefined)."""
+    d = np.asarray(d, float)
+    c = d[..., 0]
+    if np.any(c <= -1.0 + 1e-12):
+        raise ValueError("turn_e1_to: a direction opposite to e1 has no smallest rotation")
+    k = np.stack([np.zeros_like(c), -d[..., 2], d[..., 1]], -1)   # e1 x d = sin(a) axis
+    K = skew(k)
+    # Rodrigues: I + K + K^2 / (1 + cos a), exact for |k| = sin a
+    return np.eye(3) + K + (K @ K) / (1.0 + c)[..., None, None]
 
 
 def tip_basis(theta) -> np.ndarray:

@@ -128,6 +128,7 @@ class _ModeGeometry:
         self.lay = model.layout
         self.nb = model.n_blades
         self.nodes = np.asarray(model.beam.props.nodes, float)      # (N+1,) span from root
+        self.line = model.beam.props.node_positions()              # (N+1, 3) in b
         self.coords = [c for c in self.rigid.coordinates]
         self.R = float(model.turbine.hub.radius + model.turbine.blade.length)
         self.tower = None
@@ -156,9 +157,7 @@ class _ModeGeometry:
         pts = np.empty((self.nb, len(self.nodes), 3))
         for k in range(self.nb):
             root = hub + H @ rg.root_offset_hub[k]
-            local = np.zeros((len(self.nodes), 3))
-            local[:, 0] = self.nodes
-            local = local + u[k]
+            local = self.line + u[k]
             pts[k] = root[None, :] + local @ B[k].T
         return pts @ S0, hub @ S0
 

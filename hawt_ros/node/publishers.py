@@ -75,13 +75,14 @@ class StatePublisher:
             yaw, teeter = float(named["yaw"]), float(named["teeter"])
             yaw_rate, teeter_rate = float(named["yaw_rate"]), float(named["teeter_rate"])
             stations = np.array([d["stations"] for d in defl], float)
+            line = np.array([d["positions"] for d in defl], float)
             disp = np.array([d["u"] for d in defl], float)
             rot = np.array([d["theta"] for d in defl], float)
             rf = np.array([d["root_force"] for d in defl], float)
             rm = np.array([d["root_moment"] for d in defl], float)
             frames = self.geometry.frames(named, t)
             loads = self.geometry.loads(named, t, rf, rm, frames)
-            points = self.geometry.blade_points(named, t, stations, disp,
+            points = self.geometry.blade_points(named, t, line, disp,
                                                 self.settings.marker_frame, frames)
         except Exception as exc:  # noqa: BLE001
             self._fail(f"reading the simulation state at t = {t:.6f} s failed: "

@@ -26,6 +26,8 @@ class SimulationOutputs:
         self._blades = [BladeIndex(lay, k) for k in range(m.n_blades)]
         self._stations = np.array(m.beam.props.nodes, float)
         self._stations.setflags(write=False)
+        self._positions = np.array(m.beam.props.node_positions(), float)
+        self._positions.setflags(write=False)
         self._N = m.beam.N
 
     def _rates(self):
@@ -53,8 +55,10 @@ class SimulationOutputs:
         return out
 
     def blade_deflections(self) -> list:
-        """Per blade: dict(stations (N+1,) [m], u (N+1,3) [m], theta (N+1,3) (Rodrigues, root
-        frame b), root_force (3,) [N], root_moment (3,) [N m] (loads on the hub, frame b))."""
+        """Per blade: dict(stations (N+1,) [m] (span along b1), positions (N+1, 3) [m] (the
+        undeformed reference line in the root frame b: (stations, 0, 0) unless the blade
+        has prebend or sweep), u (N+1,3) [m], theta (N+1,3) (Rodrigues, root frame b),
+        root_force (3,) [N], root_moment (3,) [N m] (loads on the hub, frame b))."""
         y = self.y
         out = []
         N = self._N
@@ -63,7 +67,8 @@ class SimulationOutputs:
             th = np.zeros((N + 1, 3))
             u[1:] = y[b.u].reshape(N, 3)
             th[1:] = y[b.theta].reshape(N, 3)
-            out.append({"stations": self._stations, "u": u, "theta": th,
+            out.append({"stations": self._stations, "positions": self._positions,
+                        "u": u, "theta": th,
                         "root_force": y[b.root_force].copy(),
                         "root_moment": y[b.root_moment].copy()})
         return out
