@@ -120,11 +120,19 @@ class SectionTable:
 
 @dataclass(frozen=True, eq=False)
 class Beam:
-    """A flexible beam: length [m], section table and number of finite elements."""
+    """A flexible beam: length [m], section table and number of finite elements.
+
+    ``tip_mass`` [kg]: a rigid body at the tip point of the reference line (ElastoDyn's
+    TipMass: a tip brake, a tip weight); ``tip_inertia`` (J1, J2, J3) [kg m^2]: its
+    principal inertias about the tip section's axes (b1 spanwise, b2, b3), about its
+    centre of mass at the tip point.
+    """
 
     length: float
     sections: SectionTable
     elements: int = 4
+    tip_mass: float = 0.0
+    tip_inertia: tuple = (0.0, 0.0, 0.0)
 
 
 @dataclass(frozen=True)
@@ -222,6 +230,64 @@ class Drivetrain:
     generator: str = "prescribed"
 
 
+@dataclass(frozen=True, eq=False)
+class Polar:
+    """An airfoil's lift, drag and pitching-moment coefficients against the angle of attack
+    (one table: one Reynolds number).
+
+    ``alpha`` [rad] strictly increasing; ``cl``, ``cd``, ``cm`` [-] one per angle (``cm``
+    about the quarter chord, nose up positive, as AeroDyn's); ``reynolds`` [-] and
+    ``thickness`` (t/c) [-] of the table when known (None otherwise).
+    """
+
+    name: str
+    alpha: np.ndarray
+    cl: np.ndarray
+    cd: np.ndarray
+    cm: np.ndarray
+    reynolds: Optional[float] = None
+    thickness: Optional[float] = None
+
+    def __post_init__(self):
+        for k in ("alpha", "cl", "cd", "cm"):
+            object.__setattr__(self, k, _frozen_array(getattr(self, k), 1))
+
+
+@dataclass(frozen=True, eq=False)
+class Aerodynamics:
+    """The blade's aerodynamic description (AeroDyn's blade file and airfoil polars), held
+    for the aeroelastic analyses; the structural analyses run in a vacuum and do not use it.
+
+    Per aerodynamic station (``stations``: fractions of the blade's span ``blade.length``
+    along b1, 0 to 1): ``chord`` [m]; ``twist`` [rad], hawt's sign (positive from b2 towards
+    b3, i.e. AeroDyn's BlTwist, positive towards feather, is minus it); ``airfoil``: the
+    index into ``polars`` of the station's airfoil; ``ac_prebend``, ``ac_sweep`` [m]: the
+    aerodynamic centre's offsets along b3 and b2 (AeroDyn's BlCrvAC and -BlSwpAC; None =
+    on the straight b1 axis); ``cant`` [rad]: the airfoil plane's tilt about the chord
+    (AeroDyn's BlCrvAng; None = 0).
+    """
+
+    stations: np.ndarray
+    chord: np.ndarray
+    twist: np.ndarray
+    airfoil: np.ndarray
+    polars: tuple
+    ac_prebend: Optional[np.ndarray] = None
+    ac_sweep: Optional[np.ndarray] = None
+    cant: Optional[np.ndarray] = None
+
+    def __post_init__(self):
+        for k in ("stations", "chord", "twist"):
+            object.__setattr__(self, k, _frozen_array(getattr(self, k), 1))
+        for k in ("ac_prebend", "ac_sweep", "cant"):
+            if getattr(self, k) is not None:
+                object.__setattr__(self, k, _frozen_array(getattr(self, k), 1))
+        idx = np.array(self.airfoil, dtype=int)
+        idx.setflags(write=False)
+        object.__setattr__(self, "airfoil", idx)
+        object.__setattr__(self, "polars", tuple(self.polars))
+
+
 @dataclass(frozen=True)
 class Gravity:
     enabled: bool = False
@@ -231,7 +297,8 @@ class Gravity:
 @dataclass(frozen=True, eq=False)
 class Turbine:
     """A whole turbine. ``tower`` None means a rigid tower (the paper's example);
-    ``drivetrain`` None a rigid shaft turning at the prescribed rotor speed (the paper's)."""
+    ``drivetrain`` None a rigid shaft turning at the prescribed rotor speed (the paper's);
+    ``aerodynamics`` None: no aerodynamic description (the paper's turbine in a vacuum)."""
 
     name: str
     rotor: Rotor
@@ -241,6 +308,7 @@ class Turbine:
     tower: Optional[Beam] = None
     gravity: Gravity = field(default_factory=Gravity)
     drivetrain: Optional[Drivetrain] = None
+    aerodynamics: Optional[Aerodynamics] = None
 
     def with_rotor_speed(self, speed: float) -> "Turbine":
         return replace(self, rotor=replace(self.rotor, speed=float(speed)))

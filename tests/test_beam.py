@@ -40,7 +40,8 @@ def test_coloured_jacobian_equals_dense_complex_step_and_central_differences():
 
     Random non-trivial state (all 12 + 18 N unknowns and their rates), gravity on, tip loads,
     mass-centre and tension-centre offsets, pretwist, flexible axial and shear directions, a
-    tapered station table and root motion v, w: every term of the residual is exercised.
+    tapered station table, prebend and sweep, a rigid tip body and root motion v, w: every
+    term of the residual is exercised.
     Tolerances: coloured vs dense complex-step 1e-12 of the largest entry; vs central
     differences (relative step 1e-6) 1e-6 of the largest entry."""
     rng = np.random.default_rng(7)
@@ -50,9 +51,11 @@ def test_coloured_jacobian_equals_dense_complex_step_and_central_differences():
                        ei2=[4e6, 3e6, 1e6], ei3=[2e7, 1.5e7, 8e6], ea=[1e9, 8e8, 5e8],
                        ga2=[3e8, 2e8, 1e8], ga3=[2e8, 1.5e8, 1e8], twist=[0.3, 0.1, -0.2],
                        cg_offset=[[0.05, -0.02], [0.08, 0.01], [0.1, 0.03]],
-                       tension_offset=[[0.02, 0.01], [0.0, -0.01], [-0.03, 0.02]])
+                       tension_offset=[[0.02, 0.01], [0.0, -0.01], [-0.03, 0.02]],
+                       prebend=[0.0, 0.1, 0.4], sweep=[0.0, -0.05, 0.1])
     N = 3
-    beam = BeamElements(mesh_beam(Beam(8.0, sec, N)))
+    beam = BeamElements(mesh_beam(Beam(8.0, sec, N, tip_mass=30.0,
+                                       tip_inertia=(1.0, 2.0, 3.0))))
     y = rng.normal(size=beam.n) * 0.3
     yd = rng.normal(size=beam.n)
     v, w = rng.normal(size=3), rng.normal(size=3)

@@ -151,7 +151,7 @@ def test_nrel5mw_deck_values_land_where_the_model_expects_them():
     assert t.tower.length == 87.6 and t.tower.sections.ei2[0] == 6.14343e11
     assert t.gravity.enabled and t.gravity.g == 9.80665
     joined = " ".join(r.warnings)
-    for word in ("BldFl1Sh", "TwFAM1Sh", "CompAero", "torsional rigidity"):
+    for word in ("BldFl1Sh", "TwFAM1Sh", "Wake_Mod", "InclUAdata", "torsional rigidity"):
         assert word in joined, word
     # DrTrDOF: shaft torsion; GenDOF with ServoDyn's torque controller (not modelled): the
     # generator is held at the rotor speed, and the import says so
@@ -159,6 +159,65 @@ def test_nrel5mw_deck_values_land_where_the_model_expects_them():
     assert (d.stiffness, d.damping, d.generator_inertia, d.gearbox_ratio, d.generator) == (
         867637000.0, 6215000.0, 534.116, 97.0, "prescribed")
     assert "GenDOF = True with a generator-torque controller" in joined
+
+
+# Jonkman et al. 2009 (NREL/TP-500-38060), Table 2-1 "Distributed blade aerodynamic
+# properties": RNodes [m from the rotor centre], AeroTwst [deg], Chord [m], airfoil
+JONKMAN_TABLE_2_1 = [
+    (2.8667, 13.308, 3.542, "Cylinder1"), (5.6000, 13.308, 3.854, "Cylinder1"),
+    (8.3333, 13.308, 4.167, "Cylinder2"), (11.7500, 13.308, 4.557, "DU40_A17"),
+    (15.8500, 11.480, 4.652, "DU35_A17"), (19.9500, 10.162, 4.458, "DU35_A17"),
+    (24.0500, 9.011, 4.249, "DU30_A17"), (28.1500, 7.795, 4.007, "DU25_A17"),
+    (32.2500, 6.544, 3.748, "DU25_A17"), (36.3500, 5.361, 3.502, "DU21_A17"),
+    (40.4500, 4.188, 3.256, "DU21_A17"), (44.5500, 3.125, 3.010, "NACA64_A17"),
+    (48.6500, 2.319, 2.764, "NACA64_A17"), (52.7500, 1.526, 2.518, "NACA64_A17"),
+    (56.1667, 0.863, 2.313, "NACA64_A17"), (58.9000, 0.370, 2.086, "NACA64_A17"),
+    (61.6333, 0.106, 1.419, "NACA64_A17")]
+
+
+@needs_decks
+def test_nrel5mw_aerodynamics_are_the_published_blade():
+    """Reference: the NREL 5-MW definition report's Table 2-1 (17 aerodynamic nodes: radius,
+    twist, chord, airfoil) and, for one polar, the airfoil file's own text (DU40_A17: cl,
+    cd, cm at 0 deg read here with numpy).  Tolerances: the report's printed digits (1e-3
+    deg, 1e-3 m; radius 1e-4 m as fractions of the 61.5 m span), polar exact."""
+    from hawt_core.io.openfast import read_openfast
+    a = read_openfast(NREL).turbine.aerodynamics
+    span = a.stations * 61.4999                       # the file's last BlSpn (see its note)
+    for r, twist, chord, foil in JONKMAN_TABLE_2_1:
+        k = int(np.argmin(np.abs(span - (r - 1.5))))
+        assert span[k] == pytest.approx(r - 1.5, abs=1e-3), r
+        assert -np.degrees(a.twist[k]) == pytest.approx(twist, abs=1e-3), r
+        assert a.chord[k] == pytest.approx(chord, abs=1e-3), r
+        assert a.polars[a.airfoil[k]].name == foil, r
+    du40 = next(p for p in a.polars if p.name == "DU40_A17")
+    rows = [line.split() for line in (NREL.parent / "Airfoils" / "DU40_A17.dat")
+            .read_text().splitlines()]
+    table = np.array([[float(x) for x in row[:4]] for row in rows
+                      if len(row) >= 4 and all(_is_float(x) for x in row[:4])])
+    zero = table[np.argmin(np.abs(table[:, 0]))]
+    assert zero[0] == 0.0
+    j = int(np.argmin(np.abs(du40.alpha)))
+    assert (du40.alpha[j], du40.cl[j], du40.cd[j], du40.cm[j]) == (0.0, *zero[1:4])
+    assert du40.reynolds == 0.75e6 and len(du40.alpha) == len(table)
+    # the aerodynamic centre's offsets (BlCrvAC, -BlSwpAC) are kept
+    assert a.ac_sweep is not None and a.ac_sweep[5] == pytest.approx(0.56986665)
+
+
+def _is_float(text: str) -> bool:
+    try:
+        float(text)
+        return True
+    except ValueError:
+        return False
+
+
+@needs_decks
+def test_a_deck_without_its_airfoil_files_keeps_its_structure_and_says_so(tmp_path):
+    from hawt_core.io.openfast import read_openfast
+    r = read_openfast(_deck_copy(tmp_path) / "NREL-5MW.fst")     # Airfoils/ not copied
+    assert r.turbine.aerodynamics is None and r.turbine.blade.length == 61.5
+    assert any("aerodynamics are not imported" in w and "Airfoils" in w for w in r.warnings)
 
 
 @needs_decks
@@ -202,6 +261,7 @@ def _edit(path: Path, key: str, value: str):
     ("NRELOffshrBsline5MW_Onshore_ElastoDyn.dat", "TwrFile", '"nowhere.dat"',
      ["ElastoDyn tower", "nowhere.dat", "not found"]),
     ("NREL-5MW.fst", "CompElast", "3", ["CompElast", "ElastoDyn"]),
+    ("NRELOffshrBsline5MW_Onshore_ElastoDyn.dat", "TipMass(3)", "5", ["TipMass", "identical"]),
 ])
 def test_bad_decks_get_one_error_naming_file_key_and_what_is_allowed(tmp_path, file, key,
                                                                      value, words):
@@ -213,6 +273,20 @@ def test_bad_decks_get_one_error_naming_file_key_and_what_is_allowed(tmp_path, f
     msg = str(e.value)
     for w in words:
         assert w in msg, (w, msg)
+
+
+@needs_decks
+def test_elastodyn_tip_masses_are_the_blades_tip_body(tmp_path):
+    """Reference: the deck itself: TipMass(1..3) = 250 kg becomes the blade's tip mass (a
+    note says so, no warning; the tip body's physics: tests/test_beam_geometry.py)."""
+    from hawt_core.io.openfast import read_openfast
+    d = _deck_copy(tmp_path)
+    for k in (1, 2, 3):
+        _edit(d / "NRELOffshrBsline5MW_Onshore_ElastoDyn.dat", f"TipMass({k})", "250")
+    r = read_openfast(d / "NREL-5MW.fst")
+    assert r.turbine.blade.tip_mass == 250.0
+    assert any("250 kg point mass at the tip" in n for n in r.notes)
+    assert not any("TipMass" in w for w in r.warnings)
 
 
 @needs_decks

@@ -353,3 +353,58 @@ def test_documentation_section_snippets_load():
             warnings.simplefilter("error")
             t = turbine_from_dict(d)
         assert t.blade.sections.stiffness_6x6 is not None
+
+
+# ---------------------------------------------------------------------------- aerodynamics
+def _aero() -> dict:
+    """A small valid aerodynamics block: 3 stations, two polars."""
+    foil = lambda name, k: {"name": name, "reynolds": 6e6, "thickness": 0.2 * k,
+                            "alpha": [-3.1, -0.1, 0.0, 0.2, 3.1],
+                            "cl": [0.0, -0.5, 0.1, 1.2, 0.0], "cd": [0.02, 0.01, 0.008, 0.02, 0.05],
+                            "cm": [0.0, -0.05, -0.06, -0.08, 0.0]}
+    return {"stations": [0.0, 0.5, 1.0], "chord": [3.0, 2.5, 1.0], "twist": [0.2, 0.05, 0.0],
+            "airfoil": [0, 1, 1], "polars": [foil("thick", 2), foil("thin", 1)]}
+
+
+def test_aerodynamics_round_trip_and_in_vacuum_note(tmp_path, capsys):
+    """Reference: the file format (docs/turbine-format.md, aerodynamics): the block reads to
+    model.Aerodynamics and writes back to an equal turbine; the structural analyses say
+    they run in a vacuum."""
+    from hawt_core import cli
+    d = default_dict()
+    d["aerodynamics"] = _aero()
+    t = turbine_from_dict(d)
+    a = t.aerodynamics
+    assert a.airfoil.tolist() == [0, 1, 1] and a.polars[1].name == "thin"
+    assert a.polars[0].thickness == 0.4 and a.polars[0].cm[2] == -0.06
+    assert turbines_equal(turbine_from_dict(yaml.safe_load(dump_turbine(t))), t)
+    f = tmp_path / "aero.yaml"
+    f.write_text(dump_turbine(t))
+    assert cli.main(["blade-modes", str(f), "--count", "2"]) == 0
+    assert "in a vacuum" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("edit,words", [
+    (lambda a: a["polars"][0].update(alpha=[-180.0, 0.0, 5.0, 10.0, 180.0]),
+     ["aerodynamics.polars[0].alpha", "radians"]),
+    (lambda a: a["polars"][1].update(alpha=[0.0, -0.1, 0.2, 0.3, 0.4]),
+     ["aerodynamics.polars[1].alpha", "increasing"]),
+    (lambda a: a["polars"][0].update(cd=[0.02, -0.01, 0.008, 0.02, 0.05]),
+     ["aerodynamics.polars[0].cd[1]", ">= 0"]),
+    (lambda a: a["polars"][0].update(cl=[0.0, 1.0]), ["aerodynamics.polars[0].cl", "stations"]),
+    (lambda a: a.update(airfoil=[0, 2, 1]), ["aerodynamics.airfoil[1]", "0 to 1"]),
+    (lambda a: a.update(chord=[3.0, 0.0, 1.0]), ["aerodynamics.chord[1]", "> 0"]),
+    (lambda a: a.update(polars=[]), ["aerodynamics.polars", "at least one"]),
+    (lambda a: a.pop("twist"), ["aerodynamics.twist", "required"]),
+    (lambda a: a["polars"][0].update(lift=[1.0]), ["aerodynamics.polars[0].lift", "unknown"]),
+])
+def test_bad_aerodynamics_are_refused_naming_the_key(edit, words):
+    """Reference: the loader's contract: an error naming the key, the value and what is
+    allowed."""
+    d = default_dict()
+    d["aerodynamics"] = _aero()
+    edit(d["aerodynamics"])
+    with pytest.raises(TurbineFileError) as ex:
+        turbine_from_dict(d)
+    for w in words:
+        assert w in str(ex.value), (w, str(ex.value))

@@ -86,6 +86,7 @@ def _blade_modes(turbine, elements, rotor_speed, count, method, band_factor):
                           eigenvalue=complex(lam[j]), shape=mode_shape(model.beam, x)))
     settings = {"turbine": turbine.name, "elements": model.beam.N, "rotor_speed": om,
                 "hub_radius": float(turbine.hub.radius), "method": method,
-                "count": count, "unknowns": model.n}
+                "count": count, "unknowns": model.n,
+                "in_vacuum": turbine.aerodynamics is not None}
     return BladeModesResult(rotor_speed=om, elements=model.beam.N, modes=modes,
                             root_force=y0[0:3].copy(), settings=settings)

@@ -406,6 +406,7 @@ def _modal_analysis(turbine, elements, rotor_speed, steps, method, fast, harmoni
         modes.sort(key=lambda m: (m.frequency_per_rev, m.real_per_rev))
     number_modes(modes)
     settings = {"turbine": turbine.name, "elements": model.beam.N, "rotor_speed": omega,
+                "in_vacuum": turbine.aerodynamics is not None,
                 "method": "standstill" if standstill else method, "steps": steps,
                 "fast": bool(use_fast),
                 "blades": model.n_blades, "resolution_per_rev": limit,

@@ -171,10 +171,12 @@ def marching_args(p):
                    help="time steps per rotor period of the marching methods (default: 400 "
                         "radau, 1000 paper)")
     p.add_argument("--method", choices=("auto", "radau", "paper", "hill"), default="auto",
-                   help="auto (default): multi-blade coordinates where they make the system "
-                        "time-invariant (3+ identical blades on a rigid hub, no gravity), "
-                        "else radau; radau: Radau IIA monodromy; paper: the paper's central "
-                        "differencing; hill: Hill's method (harmonic balance eigenproblem)")
+                   help="auto (default): Hill's method in multi-blade coordinates where the "
+                        "rotor's symmetry allows them (3+ identical blades on a rigid hub: "
+                        "one eigenproblem without gravity or tilt, a few harmonics of Nb "
+                        "per-rev with them), else radau; radau: Radau IIA monodromy; paper: "
+                        "the paper's central differencing; hill: Hill's method (harmonic "
+                        "balance eigenproblem)")
 
 
 # ---------------------------------------------------------------------------- campbell

@@ -42,7 +42,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..numerics.rotations import LEVI_CIVITA_9, dot
+from ..numerics.rotations import LEVI_CIVITA_9, cross as cross3, dot, rot_apply
 from .sections import ElementProperties
 
 #: Offsets inside the per-element block of 18 unknowns.
@@ -97,6 +97,11 @@ class BeamElements:
         #: compliance (N, 6, 6) acting on the F, M unknowns (turned-b components)
         self.R = turn(props.compliance) if props.curved else props.compliance
         self.mass = mu
+        #: the rigid tip body: mass [kg] and inertia (3, 3) [kg m^2] in turned-b components
+        self.tip_mass = float(props.tip_mass)
+        J = np.diag(np.asarray(props.tip_inertia, float))
+        self.tip_inertia = frames[-1] @ J @ frames[-1].T
+        self._has_tip_body = self.tip_mass != 0 or np.any(J != 0)
         self.differential = self._differential_mask()
         self._precompute()
 
@@ -277,7 +282,23 @@ class BeamElements:
             blk[:, -1, 6:9] += tip_force
         if tip_moment is not None:
             blk[:, -1, 9:12] += tip_moment
+        if self._has_tip_body:
+            blk[:, -1, 6:12] += self._tip_body_loads(yd, y, g)
         return out
+
+    def _tip_body_loads(self, yd, y, g):
+        """(B, 6) loads of the rigid tip body on the tip node, added to its equilibrium rows:
+        F = m (C g - Vdot - Omega x V), M = -(J Omegadot + Omega x J Omega), from the tip
+        node's theta, V, Omega and rates (turned-b components, as the rows)."""
+        o = ROOT_SIZE + BLOCK_SIZE * (self.N - 1)
+        th, V, Om = y[:, o + 9:o + 12], y[:, o + 12:o + 15], y[:, o + 15:o + 18]
+        Vd, Omd = yd[:, o + 12:o + 15], yd[:, o + 15:o + 18]
+        F = -self.tip_mass * (Vd + cross3(Om, V))
+        if g is not None:
+            F = F + self.tip_mass * rot_apply(th, g)
+        J = self.tip_inertia
+        M = -(Omd @ J.T + cross3(Om, Om @ J.T))
+        return np.concatenate([F, M], -1)
 
     # ------------------------------------------------------------------ helpers
     def dynamic_dimension(self) -> int:

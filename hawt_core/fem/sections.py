@@ -140,6 +140,7 @@ class ElementProperties:
     ``positions`` (N+1, 3) of the nodes in the root frame b [m] and ``frames`` (N, 3, 3),
     the element section frames a (columns: a1 along the element, a2, a3) in b.  None
     means the straight line along b1: positions (nodes, 0, 0), frames the identity.
+    ``tip_mass`` [kg], ``tip_inertia`` [kg m^2]: the rigid tip body (model.Beam).
     """
 
     nodes: np.ndarray
@@ -148,6 +149,8 @@ class ElementProperties:
     mass: np.ndarray
     positions: Optional[np.ndarray] = None
     frames: Optional[np.ndarray] = None
+    tip_mass: float = 0.0
+    tip_inertia: tuple = (0.0, 0.0, 0.0)
 
     @property
     def n_elements(self) -> int:
@@ -207,12 +210,14 @@ def mesh_beam(beam: Beam, elements: int | None = None) -> ElementProperties:
     comp = element_compliance(beam.sections, beam.length, nodes)
     mass = element_average(st, station_mass(beam.sections), nodes)
     pos = reference_line(beam.sections, beam.length, nodes)
+    tip = dict(tip_mass=float(beam.tip_mass), tip_inertia=tuple(map(float, beam.tip_inertia)))
     if pos is None:
-        return ElementProperties(nodes=nodes, h=np.diff(nodes), compliance=comp, mass=mass)
+        return ElementProperties(nodes=nodes, h=np.diff(nodes), compliance=comp, mass=mass,
+                                 **tip)
     chord = np.diff(pos, axis=0)
     h = np.linalg.norm(chord, axis=1)
     frames = turn_e1_to(chord / h[:, None])
     # the section tables give properties per unit length of the line: the element's
     # chord carries them (the projected length along b1 would shorten it)
     return ElementProperties(nodes=nodes, h=h, compliance=comp, mass=mass, positions=pos,
-                             frames=frames)
+                             frames=frames, **tip)

@@ -36,6 +36,7 @@ from __future__ import annotations
 import math
 import os
 import re
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -195,10 +196,97 @@ def _main(deck: _Deck):
             deck.warnings.append(f"{deck.fst.name}: {k} = {comp[k]} read but not modelled: "
                                  "hawt clamps the tower at its base (no substructure, "
                                  "hydrodynamics, mooring or ice)")
-    if comp["CompAero"]:
-        deck.warnings.append(f"{deck.fst.name}: CompAero = {comp['CompAero']}: the aerodynamic "
-                             "model is not imported (hawt's turbine is in a vacuum)")
+    if comp["CompAero"] not in (0, 2):
+        deck.warnings.append(f"{deck.fst.name}: CompAero = {comp['CompAero']} (AeroDisk): "
+                             "read but not imported; hawt reads AeroDyn (CompAero = 2)")
     return comp
+
+
+#: AeroDyn options hawt reads but does not model yet (one warning lists the given ones).
+AERODYN_OPTIONS = ("Wake_Mod", "TwrPotent", "TwrShadow", "TwrAero", "UA_Mod", "DBEMT_Mod",
+                   "SkewMod", "TipLoss", "HubLoss", "TanInd", "AIDrag", "TIDrag")
+
+
+def _aerodynamics(deck: _Deck, comp: dict, nb: int, length: float):
+    """The AeroDyn blade and airfoil polars (CompAero = 2) as model.Aerodynamics, or None.
+    A deck whose AeroDyn files cannot be read still gives its structure: a warning names
+    the file and says the aerodynamics are not imported."""
+    from ..model import Aerodynamics, Polar
+
+    if comp["CompAero"] != 2:
+        return None
+    try:
+        ad_file = deck.path(deck.fst.parent, deck.vt["Fst"]["AeroFile"], "AeroDyn")
+        deck.read("AeroDyn", ad_file, deck.reader.read_AeroDyn)
+    except TurbineFileError as exc:
+        deck.warnings.append(f"the aerodynamics are not imported: {exc}")
+        return None
+    ad, bl = deck.vt["AeroDyn"], deck.vt["AeroDynBlade"]
+    adn = Path(deck.sources["AeroDyn"]).name
+    base = Path(deck.sources["AeroDyn"]).parent / deck.vt["Fst"]["AeroFile_path"]
+    names = [ad.get(f"ADBlFile{k}") for k in range(1, nb + 1)]
+    if isinstance(bl, list) or len(set(names)) > 1:
+        raise TurbineFileError(deck.sources["AeroDyn"], [
+            f"ADBlFile(1..{nb}) = {names}: hawt's blades are identical; allowed: one AeroDyn "
+            "blade file for every blade"])
+    deck.sources["AeroDyn blade"] = os.path.normpath(base / names[0])
+    blade_file = deck.sources["AeroDyn blade"]
+    t = _table(deck, "AeroDyn blade", ("BlSpn", "BlChord"), dict(
+        BlSpn=np.asarray(bl["BlSpn"], float) / float(bl["BlSpn"][-1]), BlChord=bl["BlChord"]))
+    span = float(bl["BlSpn"][-1])
+    if abs(span - length) > 1e-3 * length:
+        deck.warnings.append(f"{Path(blade_file).name}: BlSpn ends at {span:.6g} m but the "
+                             f"structural blade is {length:.6g} m long; the aerodynamic "
+                             "stations are taken as fractions of BlSpn's span")
+    extra = {}
+    for key, hawt, scale in (("BlCrvAC", "ac_prebend", 1.0), ("BlSwpAC", "ac_sweep", -1.0),
+                             ("BlCrvAng", "cant", math.pi / 180)):
+        v = scale * np.asarray(bl[key], float)
+        extra[hawt] = v if np.any(v != 0) else None
+    for key in ("BlCb", "BlCenBn", "BlCenBt", "BlCpn", "BlCpt", "BlCan", "BlCat", "BlCam"):
+        v = bl.get(key)
+        if v is not None and np.any(np.asarray(v, float) != 0):
+            deck.warnings.append(f"{Path(blade_file).name}: {key} (marine hydrodynamic "
+                                 "coefficients) read but not modelled")
+    ids = np.asarray(bl["BlAFID"], int) - 1
+    if np.any(ids < 0) or np.any(ids >= len(ad["af_data"])):
+        raise TurbineFileError(blade_file, [f"BlAFID = {(ids + 1).tolist()}: must be 1 .. "
+                                            f"NumAFfiles = {len(ad['af_data'])}"])
+    deck.sources["AeroDyn airfoils"] = os.path.commonpath(ad["AFNames"]) \
+        if len(ad["AFNames"]) > 1 else ad["AFNames"][0]
+    polars, extra_tables, ua = [], [], []
+    for name, tables in zip(ad["AFNames"], ad["af_data"]):
+        tab = tables[0]
+        if len(tables) > 1:
+            extra_tables.append(Path(name).name)
+        if tab.get("InclUAdata"):
+            ua.append(Path(name).name)
+        cm = tab["Cm"] if ad.get("InCol_Cm", 0) > 0 else [0.0] * len(tab["Alpha"])
+        polars.append(Polar(name=Path(name).stem, alpha=np.radians(np.asarray(tab["Alpha"],
+                                                                               float)),
+                            cl=tab["Cl"], cd=tab["Cd"], cm=cm,
+                            reynolds=float(tab["Re"]) if tab.get("Re") else None,
+                            thickness=tab.get("RelThickness")))
+    if ad.get("InCol_Cm", 0) <= 0:
+        deck.warnings.append(f"{adn}: InCol_Cm = 0: the polars have no moment column; cm "
+                             "taken as 0")
+    if extra_tables:
+        deck.warnings.append(f"{adn}: airfoils with tables at several Reynolds numbers "
+                             f"({', '.join(extra_tables)}): the first table is kept")
+    if ua:
+        deck.warnings.append(f"{adn}: the unsteady-aerodynamics coefficients (InclUAdata) of "
+                             f"{len(ua)} airfoils read but not kept: hawt's unsteady airfoil "
+                             "model is yet to come")
+    given = [f"{k} = {ad[k]}" for k in AERODYN_OPTIONS if ad.get(k) not in (None, 0, False)]
+    if given:
+        deck.warnings.append(f"{adn}: {', '.join(given)} read but not modelled yet: hawt keeps "
+                             "the blade and its polars for its aerodynamics, and its analyses "
+                             "run in a vacuum")
+    deck.notes.append(f"aerodynamics: {len(t['BlSpn'])} AeroDyn blade stations and "
+                      f"{len(polars)} airfoil polars (first table each), kept in the model")
+    return Aerodynamics(stations=t["BlSpn"], chord=t["BlChord"],
+                        twist=-np.radians(np.asarray(bl["BlTwist"], float)), airfoil=ids,
+                        polars=tuple(polars), **extra)
 
 
 def _check_dofs(deck: _Deck, ed_file: str, nb: int):
@@ -474,10 +562,15 @@ def read_openfast(path) -> ImportResult:
     if len(set(cones)) > 1:
         raise TurbineFileError(str(ed_file), [f"PreCone(1..{nb}) = {cones}: hawt's blades are "
                                               "identical; allowed: one precone for all"])
+    tips = [deck.number("ElastoDyn", f"TipMass({k})", rule=">= 0") for k in range(1, nb + 1)]
+    if len(set(tips)) > 1:
+        raise TurbineFileError(str(ed_file), [f"TipMass(1..{nb}) = {tips}: hawt's blades are "
+                                              "identical; allowed: one tip mass for all"])
     for k in range(1, nb + 1):
-        for key in (f"TipMass({k})", f"PBrIner({k})", f"BlPIner({k})"):
+        for key in (f"PBrIner({k})", f"BlPIner({k})"):
             if deck.number("ElastoDyn", key, rule=">= 0"):
-                deck.warnings.append(f"{edn}: {key} = {ed[key]} read but not modelled yet")
+                deck.warnings.append(f"{edn}: {key} = {ed[key]} read but not modelled (hawt's "
+                                     "blades have no pitch degree of freedom, as ElastoDyn's)")
     tip, hubr = deck.number("ElastoDyn", "TipRad"), deck.number("ElastoDyn", "HubRad", rule=">= 0")
     if not tip > hubr:
         raise TurbineFileError(str(ed_file), [f"TipRad = {tip}: must exceed HubRad = {hubr}"])
@@ -515,6 +608,9 @@ def read_openfast(path) -> ImportResult:
                       shaft_height=deck.number("ElastoDyn", "Twr2Shft"),
                       yaw_bearing_mass=deck.number("ElastoDyn", "YawBrMass", rule=">= 0"))
     blade = _blade(deck, comp, ed_file, nb, tip - hubr)
+    if tips[0]:
+        blade = replace(blade, tip_mass=float(tips[0]))
+        deck.notes.append(f"blade: a {tips[0]:g} kg point mass at the tip (TipMass)")
     tower = _tower(deck, ed_file, flexible_tower)
     g = deck.number(MAIN, "Gravity", rule=">= 0")
     name = fst.stem
@@ -522,7 +618,8 @@ def read_openfast(path) -> ImportResult:
                                              precone=math.radians(cones[0])),
                       hub=hub, nacelle=nacelle, blade=blade, tower=tower,
                       gravity=Gravity(enabled=g > 0, g=g if g > 0 else 9.81),
-                      drivetrain=_drivetrain(deck, ed_file, servo))
+                      drivetrain=_drivetrain(deck, ed_file, servo),
+                      aerodynamics=_aerodynamics(deck, comp, nb, tip - hubr))
     return ImportResult(turbine=turbine, importer=IMPORTER, main_role=MAIN,
                         warnings=deck.warnings, notes=deck.notes, sources=deck.sources,
                         packages={"Examples": "rosco"})

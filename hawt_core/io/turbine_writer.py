@@ -63,9 +63,28 @@ def _table_dict(t: SectionTable) -> dict:
     return out
 
 
+def _aero_dict(a) -> dict:
+    out = {"stations": a.stations.tolist(), "chord": _compact(a.chord),
+           "twist": _compact(a.twist), "airfoil": [int(i) for i in a.airfoil]}
+    for key in ("ac_prebend", "ac_sweep", "cant"):
+        if getattr(a, key) is not None:
+            out[key] = _compact(getattr(a, key))
+    out["polars"] = [{"name": str(p.name),
+                      **({"reynolds": float(p.reynolds)} if p.reynolds is not None else {}),
+                      **({"thickness": float(p.thickness)} if p.thickness is not None else {}),
+                      "alpha": p.alpha.tolist(), "cl": p.cl.tolist(), "cd": p.cd.tolist(),
+                      "cm": p.cm.tolist()} for p in a.polars]
+    return out
+
+
 def _beam_dict(b: Beam) -> dict:
-    return {"length": float(b.length), "elements": int(b.elements),
-            "sections": _table_dict(b.sections)}
+    out = {"length": float(b.length), "elements": int(b.elements)}
+    if b.tip_mass:
+        out["tip_mass"] = float(b.tip_mass)
+    if any(b.tip_inertia):
+        out["tip_inertia"] = [float(v) for v in b.tip_inertia]
+    out["sections"] = _table_dict(b.sections)
+    return out
 
 
 def dump_turbine(turbine: Turbine, header: str | None = None) -> str:
@@ -110,6 +129,8 @@ def dump_turbine(turbine: Turbine, header: str | None = None) -> str:
                               "generator_inertia": float(dt.generator_inertia),
                               "gearbox_ratio": float(dt.gearbox_ratio),
                               "generator": str(dt.generator)}
+    if turbine.aerodynamics is not None:
+        data["aerodynamics"] = _aero_dict(turbine.aerodynamics)
     top = ("# hawt turbine file, written by hawt_core.io.dump_turbine.\n"
            "# SI units (m, kg, s, N), angles in rad, rotor speed in rad/s; "
            "see docs/turbine-format.md.\n")
@@ -124,6 +145,8 @@ def turbines_equal(a: Any, b: Any) -> bool:
         if type(a) is not type(b):
             return False
         return all(turbines_equal(getattr(a, f.name), getattr(b, f.name)) for f in fields(a))
+    if isinstance(a, (tuple, list)) and isinstance(b, (tuple, list)):
+        return len(a) == len(b) and all(turbines_equal(x, y) for x, y in zip(a, b))
     if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
         if a is None or b is None:
             return False

@@ -19,7 +19,6 @@ full 6x6 matrix) gives a :class:`TurbineFileWarning`.
 """
 from __future__ import annotations
 
-import difflib
 import math
 import re
 import warnings
@@ -30,8 +29,9 @@ from typing import Any, Optional
 import numpy as np
 import yaml
 
-from ..model import (GENERATOR_MODES, Beam, Drivetrain, Gravity, Hub, Nacelle, Rotor,
-                     SectionTable, Turbine)
+from ..model import (GENERATOR_MODES, Aerodynamics, Beam, Drivetrain, Gravity, Hub, Nacelle,
+                     Polar, Rotor, SectionTable, Turbine)
+from .checker import _Checker, _plain, _show, _type_name
 
 __all__ = [
     "TurbineFileError", "TurbineFileWarning", "load_turbine", "turbine_from_dict",
@@ -40,8 +40,6 @@ __all__ = [
 
 #: Relative tolerance on ``I1 = I2 + I3`` before a TurbineFileWarning is issued.
 I1_TOLERANCE = 0.01
-#: Relative tolerance for the symmetry of a 6x6 section matrix (scaled by its largest entry).
-SYMMETRY_TOLERANCE = 1e-9
 
 
 class TurbineFileError(ValueError):
@@ -74,9 +72,11 @@ def default_turbine_path() -> Path:
 
 # --------------------------------------------------------------------------------------------
 # YAML reading: accept 4.36e6 as a float (YAML 1.1 insists on a dot and a signed exponent) and
-# refuse duplicate keys (PyYAML silently keeps the last one).
+# refuse duplicate keys (PyYAML silently keeps the last one).  The parser is libyaml's where
+# PyYAML has it (CSafeLoader: a file with airfoil polars parses 5-10x faster); resolution and
+# construction, where those rules live, stay in Python either way.
 
-class _Loader(yaml.SafeLoader):
+class _Loader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):
     pass
 
 
@@ -100,7 +100,7 @@ def _construct_mapping(loader, node, deep=False):
                 None, None, f"duplicate key {key!r} (first given on line {seen[key] + 1})",
                 key_node.start_mark)
         seen[key] = key_node.start_mark.line
-    return yaml.SafeLoader.construct_mapping(loader, node, deep=deep)
+    return yaml.constructor.SafeConstructor.construct_mapping(loader, node, deep=deep)
 
 
 _Loader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_mapping)
@@ -122,7 +122,11 @@ def _parse_yaml(text: str, source: str):
 # The schema: for each section, its keys and whether they are required.
 
 _TOP = {"name": False, "rotor": True, "hub": True, "nacelle": True, "blade": True,
-        "tower": False, "gravity": False, "drivetrain": False}
+        "tower": False, "gravity": False, "drivetrain": False, "aerodynamics": False}
+_AERO = {"stations": True, "chord": True, "twist": True, "airfoil": True, "polars": True,
+         "ac_prebend": False, "ac_sweep": False, "cant": False}
+_POLAR = {"name": True, "alpha": True, "cl": True, "cd": True, "cm": True,
+          "reynolds": False, "thickness": False}
 _DRIVETRAIN = {"stiffness": False, "damping": False, "generator_inertia": False,
                "gearbox_ratio": False, "generator": False}
 _ROTOR = {"speed": True, "blades": True, "precone": False}
@@ -133,8 +137,9 @@ _NACELLE = {"yaw_inertia": True, "yaw_stiffness": False, "yaw_damping": False,
             "yaw_to_teeter": True, "shaft_tilt": False, "yaw_free": True, "mass": False,
             "cg_offset": False, "inertia_pitch": False, "inertia_roll": False,
             "shaft_height": False, "yaw_bearing_mass": False}
-_BEAM = {"length": True, "elements": True, "sections": True}
-_TOWER = dict(_BEAM, rigid=False)
+_TOWER = {"length": True, "elements": True, "sections": True, "rigid": False}
+_BEAM = {"length": True, "elements": True, "sections": True, "tip_mass": False,
+         "tip_inertia": False}
 _GRAVITY = {"enabled": True, "g": False}
 #: Per-station scalar properties: name -> value rule (a key of _RULES).
 SCALAR_PROPS = {
@@ -150,329 +155,6 @@ _SECTIONS = dict({"stations": True}, **{k: False for k in SCALAR_PROPS},
                  prebend=False, sweep=False)
 #: Offsets of a curved reference line, per station [m] (blades only).
 LINE_PROPS = ("prebend", "sweep")
-
-_RULES = {
-    "> 0": "must be > 0",
-    ">= 0": "must be >= 0",
-    "finite": "must be a finite number",
-    "angle": "must be an angle in radians strictly between -pi/2 and pi/2 "
-             "(angles are in radians; did you give degrees?)",
-    "twist": "must be an angle in radians between -pi/2 and pi/2 "
-             "(angles are in radians; did you give degrees?)",
-}
-
-
-def _rule_ok(x: float, rule: str) -> bool:
-    if rule == "> 0":
-        return x > 0
-    if rule == ">= 0":
-        return x >= 0
-    if rule == "angle":
-        return abs(x) < math.pi / 2
-    if rule == "twist":
-        return abs(x) <= math.pi / 2
-    return True
-
-
-def _show(value: Any) -> str:
-    """A short, readable rendering of an offending value."""
-    if isinstance(value, str):
-        text = repr(value)
-    elif isinstance(value, (float, np.floating)):
-        text = repr(float(value))
-    elif isinstance(value, np.ndarray):
-        text = np.array2string(value, threshold=8)
-    else:
-        text = repr(value)
-    return text if len(text) <= 70 else text[:67] + "..."
-
-
-def _type_name(value: Any) -> str:
-    if isinstance(value, bool):
-        return "a boolean"
-    if isinstance(value, str):
-        return "a string"
-    if isinstance(value, (list, tuple)):
-        return "a list"
-    if isinstance(value, Mapping):
-        return "a mapping"
-    if value is None:
-        return "nothing (null)"
-    return f"a {type(value).__name__}"
-
-
-def _plain(value: Any) -> Any:
-    """Numpy arrays/scalars (programmatic dicts) -> plain Python lists/numbers."""
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    if isinstance(value, np.bool_):
-        return bool(value)
-    if isinstance(value, np.integer):
-        return int(value)
-    if isinstance(value, np.floating):
-        return float(value)
-    return value
-
-
-def _is_number(value: Any) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool)
-
-
-class _Checker:
-    """Walks a parsed turbine mapping, collecting every problem with its dotted path."""
-
-    def __init__(self, source: str):
-        self.source = source
-        self.errors: list = []
-        self.warnings: list = []
-
-    def error(self, path: str, what: str, value: Any = ...):
-        if value is ...:
-            self.errors.append(f"{path}: {what}")
-        else:
-            self.errors.append(f"{path} = {_show(value)}: {what}")
-
-    # -- structure ---------------------------------------------------------------------------
-    def mapping(self, value: Any, path: str, spec: dict) -> Optional[Mapping]:
-        """Check that ``value`` is a mapping with only known keys and all required keys."""
-        if not isinstance(value, Mapping):
-            self.error(path, f"must be a mapping of keys ({', '.join(spec)}), "
-                             f"got {_type_name(value)}", value)
-            return None
-        for key in value:
-            if key not in spec:
-                self.unknown_key(f"{path}.{key}" if path else str(key), key, spec)
-        for key, required in spec.items():
-            if required and key not in value:
-                where = f"{path}.{key}" if path else key
-                self.error(where, "required key is missing")
-        return value
-
-    def unknown_key(self, path: str, key: Any, spec: dict):
-        hint = ""
-        close = difflib.get_close_matches(str(key), list(spec), n=1, cutoff=0.6)
-        if isinstance(key, str) and key.endswith(("_deg", "_rpm", "_degrees")):
-            base = key.rsplit("_", 1)[0]
-            if base in spec:
-                hint = f"; angles and speeds are in radians (rad/s): use '{base}'"
-        if not hint and close:
-            hint = f"; did you mean '{close[0]}'?"
-        self.errors.append(f"{path}: unknown key{hint} (allowed: {', '.join(spec)})")
-
-    # -- scalars -----------------------------------------------------------------------------
-    def number(self, d: Mapping, key: str, path: str, rule: str, default: Any = None):
-        """A finite float obeying ``rule``, or ``default`` if absent; None on error."""
-        p = f"{path}.{key}"
-        if key not in d:
-            return default
-        return self.number_value(_plain(d[key]), p, rule)
-
-    def number_value(self, value: Any, path: str, rule: str, allow_inf: bool = False):
-        if not _is_number(value):
-            kind = "a single number" if isinstance(value, (list, tuple, Mapping)) else "a number"
-            self.error(path, f"must be {kind}, got {_type_name(value)}", value)
-            return None
-        x = float(value)
-        if math.isnan(x) or (math.isinf(x) and not allow_inf):
-            self.error(path, "must be a finite number (NaN and infinity are not allowed)", value)
-            return None
-        if not _rule_ok(x, rule):
-            self.error(path, _RULES[rule], value)
-            return None
-        return x
-
-    def integer(self, d: Mapping, key: str, path: str, minimum: int):
-        p = f"{path}.{key}"
-        if key not in d:
-            return None
-        value = _plain(d[key])
-        if isinstance(value, float) and math.isfinite(value) and value.is_integer():
-            value = int(value)
-        if not isinstance(value, int) or isinstance(value, bool):
-            self.error(p, f"must be a whole number >= {minimum}, got {_type_name(value)}", value)
-            return None
-        if value < minimum:
-            self.error(p, f"must be a whole number >= {minimum}", value)
-            return None
-        return value
-
-    def boolean(self, d: Mapping, key: str, path: str, default: Any = None):
-        p = f"{path}.{key}"
-        if key not in d:
-            return default
-        value = _plain(d[key])
-        if not isinstance(value, bool):
-            self.error(p, f"must be true or false, got {_type_name(value)}", value)
-            return None
-        return value
-
-    # -- station tables ----------------------------------------------------------------------
-    def stations(self, value: Any, path: str) -> Optional[np.ndarray]:
-        value = _plain(value)
-        if not isinstance(value, (list, tuple)):
-            self.error(path, "must be a list of spanwise stations (fractions of the length, "
-                             f"from 0 to 1), got {_type_name(value)}", value)
-            return None
-        xs = [self.number_value(_plain(v), f"{path}[{i}]", "finite") for i, v in enumerate(value)]
-        if any(x is None for x in xs):
-            return None
-        ok = True
-        if len(xs) < 2:
-            self.error(path, "needs at least 2 stations (0 and 1)", value)
-            return None
-        if xs[0] != 0.0:
-            self.error(f"{path}[0]", "the first station must be 0 (the root)", value[0])
-            ok = False
-        if xs[-1] != 1.0:
-            self.error(f"{path}[{len(xs) - 1}]", "the last station must be 1 (the tip)",
-                       value[-1])
-            ok = False
-        for i in range(1, len(xs)):
-            if not xs[i] > xs[i - 1]:
-                self.error(f"{path}[{i}]", "stations must be strictly increasing "
-                                           f"(the previous one is {xs[i - 1]!r})", value[i])
-                ok = False
-                break
-        return np.array(xs) if ok else None
-
-    def per_station(self, value: Any, path: str, ns: Optional[int], rule: str):
-        """A number (uniform: broadcast) or one number per station; array (ns,) or None."""
-        value = _plain(value)
-        if _is_number(value):
-            x = self.number_value(value, path, rule)
-            return None if x is None or ns is None else np.full(ns, x)
-        if not isinstance(value, (list, tuple)):
-            self.error(path, f"must be a number (uniform) or a list with one number per "
-                             f"station, got {_type_name(value)}", value)
-            return None
-        xs = [self.number_value(_plain(v), f"{path}[{i}]", rule) for i, v in enumerate(value)]
-        if ns is not None and len(xs) != ns:
-            self.error(path, f"has {len(xs)} values but there are {ns} stations (give one "
-                             "value per station, or a single number for a uniform property)",
-                       value)
-            return None
-        if ns is None or any(x is None for x in xs):
-            return None
-        return np.array(xs)
-
-    def pairs(self, value: Any, path: str, ns: Optional[int]):
-        """``[x2, x3]`` (uniform) or a list of ns ``[x2, x3]`` pairs [m]; array (ns, 2)."""
-        value = _plain(value)
-        what = "must be one [x2, x3] pair (uniform) or a list of [x2, x3] pairs, one per station"
-        if not isinstance(value, (list, tuple)) or len(value) == 0:
-            self.error(path, f"{what}, got {_type_name(value)}", value)
-            return None
-        if all(_is_number(_plain(v)) for v in value):
-            if len(value) != 2:
-                self.error(path, what, value)
-                return None
-            xy = [self.number_value(_plain(v), f"{path}[{i}]", "finite")
-                  for i, v in enumerate(value)]
-            return None if None in xy or ns is None else np.tile(xy, (ns, 1))
-        out, ok = [], True
-        for i, pair in enumerate(value):
-            pair = _plain(pair)
-            if not isinstance(pair, (list, tuple)) or len(pair) != 2:
-                self.error(f"{path}[{i}]", "must be an [x2, x3] pair of numbers [m]", pair)
-                ok = False
-                continue
-            xy = [self.number_value(_plain(v), f"{path}[{i}][{j}]", "finite")
-                  for j, v in enumerate(pair)]
-            ok = ok and None not in xy
-            out.append(xy)
-        if ok and ns is not None and len(out) != ns:
-            self.error(path, f"has {len(out)} pairs but there are {ns} stations", value)
-            return None
-        return np.array(out, dtype=float) if ok and ns is not None else None
-
-    def matrices(self, value: Any, path: str, ns: Optional[int], stiffness: bool):
-        """One 6x6 matrix (uniform) or one per station; symmetric positive definite.
-
-        In a stiffness matrix, ``.inf`` on one of the first three diagonal entries (EA, GA2,
-        GA3) marks a rigid direction; the rest of that row and column must then be 0.
-        """
-        value = _plain(value)
-
-        def depth(v):
-            v = _plain(v)
-            return 1 + depth(v[0]) if isinstance(v, (list, tuple)) and len(v) else 0
-
-        d = depth(value)
-        if d == 2:
-            mats, single = [value], True
-        elif d == 3:
-            mats, single = list(value), False
-        else:
-            self.error(path, "must be one 6x6 matrix (a list of 6 rows of 6 numbers) or a "
-                             "list of them, one per station", value)
-            return None
-        out = []
-        for k, mat in enumerate(mats):
-            p = path if single else f"{path}[{k}]"
-            m = self.matrix(mat, p, stiffness)
-            if m is None:
-                return None
-            out.append(m)
-        if not single and ns is not None and len(out) != ns:
-            self.error(path, f"has {len(out)} matrices but there are {ns} stations "
-                             "(give one per station, or a single matrix for uniform)")
-            return None
-        if ns is None:
-            return None
-        arr = np.array(out * ns if single else out)
-        if stiffness:
-            rigid = ~np.isfinite(np.diagonal(arr, axis1=1, axis2=2))
-            for j in range(3):
-                if rigid[:, j].any() and not rigid[:, j].all():
-                    self.error(path, f"diagonal entry [{j}][{j}] is .inf (rigid) at some "
-                                     "stations only: a direction must be rigid at all stations "
-                                     "or at none")
-                    return None
-        return arr
-
-    def matrix(self, mat: Any, path: str, stiffness: bool):
-        mat = _plain(mat)
-        if not (isinstance(mat, (list, tuple)) and len(mat) == 6
-                and all(isinstance(_plain(r), (list, tuple)) and len(_plain(r)) == 6
-                        for r in mat)):
-            self.error(path, "must be a 6x6 matrix (6 rows of 6 numbers)", mat)
-            return None
-        a = np.zeros((6, 6))
-        for i, row in enumerate(mat):
-            for j, v in enumerate(_plain(row)):
-                inf_ok = stiffness and i == j and i < 3
-                x = self.number_value(_plain(v), f"{path}[{i}][{j}]", "finite", allow_inf=inf_ok)
-                if x is None:
-                    return None
-                if math.isinf(x) and x < 0:
-                    self.error(f"{path}[{i}][{j}]", "only +.inf (rigid) is allowed", v)
-                    return None
-                a[i, j] = x
-        rigid = ~np.isfinite(np.diag(a))
-        for j in np.flatnonzero(rigid):
-            off = [k for k in range(6) if k != j and (a[j, k] != 0 or a[k, j] != 0)]
-            if off:
-                self.error(f"{path}[{j}][{off[0]}]", f"row and column {j} must be 0 off the "
-                                                     "diagonal in a rigid (.inf) direction",
-                           a[j, off[0]])
-                return None
-        flex = ~rigid
-        f = a[np.ix_(flex, flex)]
-        scale = max(np.max(np.abs(f)), 1e-300)
-        finite = np.where(np.isfinite(a), a, 0.0)
-        asym = np.abs(finite - finite.T)
-        if np.max(asym) > SYMMETRY_TOLERANCE * scale:
-            i, j = np.unravel_index(np.argmax(asym), asym.shape)
-            self.error(path, f"is not symmetric: [{i}][{j}] = {float(a[i, j])!r} but "
-                             f"[{j}][{i}] = {float(a[j, i])!r}")
-            return None
-        low = float(np.min(np.linalg.eigvalsh(0.5 * (f + f.T))))
-        if not low > 0:
-            self.error(path, f"is not positive definite (smallest eigenvalue {low:.6g}); a "
-                             "section matrix must be symmetric positive definite")
-            return None
-        return a
-
 
 # --------------------------------------------------------------------------------------------
 # Building the model.
@@ -564,18 +246,28 @@ def _beam(c: _Checker, value: Any, path: str, spec: dict) -> Optional[Beam]:
     elements = c.integer(d, "elements", path, 1)
     sections = (_section_table(c, d["sections"], f"{path}.sections", path != "tower")
                 if "sections" in d else None)
-    if None in (length, elements, sections):
+    tip = {}
+    if "tip_mass" in spec:
+        tip["tip_mass"] = c.number(d, "tip_mass", path, ">= 0", 0.0)
+        tip["tip_inertia"] = _vector3(c, d, "tip_inertia", path,
+                                      "[J1, J2, J3] in kg m^2")
+        if tip["tip_inertia"] is not None and any(v < 0 for v in tip["tip_inertia"]):
+            c.error(f"{path}.tip_inertia", "every value must be >= 0 [kg m^2]",
+                    d["tip_inertia"])
+            tip["tip_inertia"] = None
+    if None in (length, elements, sections) or None in tip.values():
         return None
-    return Beam(length=length, sections=sections, elements=elements)
+    return Beam(length=length, sections=sections, elements=elements, **tip)
 
 
-def _vector3(c: _Checker, d: Mapping, key: str, path: str):
+def _vector3(c: _Checker, d: Mapping, key: str, path: str,
+             what: str = "[x1, x2, x3] in metres"):
     """Three finite numbers (a tuple), (0, 0, 0) when absent; None on error."""
     if key not in d:
         return (0.0, 0.0, 0.0)
     value = _plain(d[key])
     if not isinstance(value, (list, tuple)) or len(value) != 3:
-        c.error(f"{path}.{key}", "must be a list of three numbers [x1, x2, x3] in metres", value)
+        c.error(f"{path}.{key}", f"must be a list of three numbers {what}", value)
         return None
     out = [c.number_value(_plain(v), f"{path}.{key}[{i}]", "finite") for i, v in enumerate(value)]
     return None if None in out else tuple(out)
@@ -595,6 +287,78 @@ def _tower(c: _Checker, value: Any) -> Optional[Beam]:
         if rigid is None:
             return None
     return _beam(c, value, "tower", _TOWER)
+
+
+def _polar(c: _Checker, value: Any, path: str) -> Optional[Polar]:
+    n_errors = len(c.errors)
+    d = c.mapping(value, path, _POLAR)
+    if d is None:
+        return None
+    name = d.get("name")
+    if not isinstance(name, str) or not name.strip():
+        c.error(f"{path}.name", "must be a non-empty text string", name)
+    raw = _plain(d.get("alpha"))
+    alpha = None
+    if not isinstance(raw, (list, tuple)):
+        if "alpha" in d:
+            c.error(f"{path}.alpha", "must be a list of angles of attack [rad]", raw)
+    else:
+        alpha = c.per_station(raw, f"{path}.alpha", len(raw), "finite")
+    na = None
+    if alpha is not None:
+        na = len(alpha)
+        if na < 2 or np.any(np.diff(alpha) <= 0):
+            c.error(f"{path}.alpha", "must be a list of at least 2 angles [rad], strictly "
+                                     "increasing", d["alpha"])
+        elif alpha[-1] - alpha[0] > 2 * math.pi + 1e-9:
+            c.error(f"{path}.alpha", f"spans {alpha[-1] - alpha[0]:.6g} rad: angles are in "
+                                     "radians, at most one turn (did you give degrees?)",
+                    [d["alpha"][0], d["alpha"][-1]])
+    coeffs = {k: c.per_station(d[k], f"{path}.{k}", na, ">= 0" if k == "cd" else "finite")
+              for k in ("cl", "cd", "cm") if k in d}
+    opt = {"reynolds": c.number(d, "reynolds", path, "> 0"),
+           "thickness": c.number(d, "thickness", path, "> 0")}
+    if len(c.errors) > n_errors:
+        return None
+    return Polar(name=name, alpha=alpha, **coeffs, **opt)
+
+
+def _aerodynamics(c: _Checker, value: Any) -> Optional[Aerodynamics]:
+    path = "aerodynamics"
+    n_errors = len(c.errors)
+    d = c.mapping(value, path, _AERO)
+    if d is None:
+        return None
+    st = c.stations(d["stations"], f"{path}.stations") if "stations" in d else None
+    ns = None if st is None else len(st)
+    polars = _plain(d.get("polars"))
+    if not isinstance(polars, (list, tuple)) or not polars:
+        c.error(f"{path}.polars", "must be a list of airfoil polars (at least one)",
+                d.get("polars"))
+        polars = []
+    polars = [_polar(c, p, f"{path}.polars[{i}]") for i, p in enumerate(polars)]
+    parts = {k: c.per_station(d[k], f"{path}.{k}", ns, rule) for k, rule in
+             (("chord", "> 0"), ("twist", "finite"), ("ac_prebend", "finite"),
+              ("ac_sweep", "finite"), ("cant", "angle")) if k in d}
+    idx = None
+    if "airfoil" in d:
+        raw = _plain(d["airfoil"])
+        raw = raw if isinstance(raw, (list, tuple)) else [raw] * (ns or 1)
+        ok = [isinstance(_plain(v), int) and not isinstance(_plain(v), bool)
+              and 0 <= _plain(v) < len(polars) for v in raw]
+        if not all(ok):
+            i = ok.index(False)
+            c.error(f"{path}.airfoil[{i}]", f"must be the index (0 to {len(polars) - 1}) of "
+                                            "one of aerodynamics.polars", raw[i])
+        elif ns is not None and len(raw) != ns:
+            c.error(f"{path}.airfoil", f"has {len(raw)} values but there are {ns} stations",
+                    raw)
+        else:
+            idx = np.array(raw, int)
+    if len(c.errors) > n_errors or st is None or idx is None \
+            or any(p is None for p in polars) or any(v is None for v in parts.values()):
+        return None
+    return Aerodynamics(stations=st, airfoil=idx, polars=tuple(polars), **parts)
 
 
 def _build(c: _Checker, data: Any, default_name: str) -> Optional[Turbine]:
@@ -682,11 +446,15 @@ def _build(c: _Checker, data: Any, default_name: str) -> Optional[Turbine]:
                                        f"({hub['inertia_lateral']!r}): it includes the hub",
                 nacelle["yaw_inertia"])
 
+    aero = _aerodynamics(c, data["aerodynamics"]) if data.get("aerodynamics") is not None \
+        else None
+
     parts = (rotor, hub, nacelle)
     if c.errors or blade is None or any(p is None or None in p.values() for p in parts):
         return None
     return Turbine(name=name, rotor=Rotor(**rotor), hub=Hub(**hub), nacelle=Nacelle(**nacelle),
-                   blade=blade, tower=tower, gravity=gravity, drivetrain=drivetrain)
+                   blade=blade, tower=tower, gravity=gravity, drivetrain=drivetrain,
+                   aerodynamics=aero)
 
 
 def turbine_from_dict(d: Mapping, source: str = "<dict>", *, _default_name: str = "unnamed",

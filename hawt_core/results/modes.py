@@ -20,6 +20,10 @@ if TYPE_CHECKING:
 
 __all__ = ['Mode', 'ModalResult', 'BladeMode', 'BladeModesResult', 'mode_shape']
 
+#: Footer of a result whose turbine has aerodynamics the analysis does not use (yet).
+VACUUM_NOTE = ("in a vacuum: the turbine's aerodynamics (blade and airfoil polars) are kept "
+               "in the model but not used by this structural analysis")
+
 
 @dataclass
 class Mode:
@@ -134,6 +138,8 @@ class ModalResult:
                               f"{unit} not shown: raise --max-per-rev)")
         if s.get("error_estimate"):
             footer.append(error_note(s["error_estimate"], "elements per blade"))
+        if s.get("in_vacuum"):
+            footer.append(VACUUM_NOTE)
         footer.append(f"computed in {self.compute_time:.2f} s")
         return format_table(header, self.modes, footer,
                             unit="Hz" if self.standstill else "per-rev")
@@ -220,6 +226,8 @@ class BladeModesResult:
                          + (error_cell(m.frequency_error) if self.estimated else ""))
         if self.estimated:
             lines.append(error_note(self.settings["error_estimate"]))
+        if self.settings.get("in_vacuum"):
+            lines.append(VACUUM_NOTE)
         return "\n".join(lines)
 
     @property
