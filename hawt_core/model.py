@@ -198,11 +198,15 @@ class Nacelle:
 
 @dataclass(frozen=True)
 class Rotor:
-    """Rotor speed Omega0 [rad/s], blade count and precone [rad]."""
+    """Rotor speed Omega0 [rad/s], blade count, precone [rad] and the blades' collective
+    ``pitch`` [rad]: every blade turned as a rigid body about its root axis b1, positive
+    from b2 towards b3 (the sign of the structural twist; ElastoDyn's BlPitch, positive
+    towards feather, is minus it)."""
 
     speed: float = 6.02
     blades: int = 2
     precone: float = 0.0
+    pitch: float = 0.0
 
 
 #: What a drivetrain's generator does: "prescribed" (it turns at the rotor speed times the

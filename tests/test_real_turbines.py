@@ -262,6 +262,7 @@ def _edit(path: Path, key: str, value: str):
      ["ElastoDyn tower", "nowhere.dat", "not found"]),
     ("NREL-5MW.fst", "CompElast", "3", ["CompElast", "ElastoDyn"]),
     ("NRELOffshrBsline5MW_Onshore_ElastoDyn.dat", "TipMass(3)", "5", ["TipMass", "identical"]),
+    ("NRELOffshrBsline5MW_Onshore_ElastoDyn.dat", "BlPitch(2)", "4", ["BlPitch", "identical"]),
 ])
 def test_bad_decks_get_one_error_naming_file_key_and_what_is_allowed(tmp_path, file, key,
                                                                      value, words):
@@ -276,14 +277,18 @@ def test_bad_decks_get_one_error_naming_file_key_and_what_is_allowed(tmp_path, f
 
 
 @needs_decks
-def test_elastodyn_tip_masses_are_the_blades_tip_body(tmp_path):
+def test_elastodyn_tip_masses_and_pitch_are_the_blades(tmp_path):
     """Reference: the deck itself: TipMass(1..3) = 250 kg becomes the blade's tip mass (a
-    note says so, no warning; the tip body's physics: tests/test_beam_geometry.py)."""
+    note says so, no warning), BlPitch(1..3) = 12 deg the rotor's pitch, minus it in
+    radians (hawt's sign; the physics of both: tests/test_beam_geometry.py)."""
     from hawt_core.io.openfast import read_openfast
     d = _deck_copy(tmp_path)
     for k in (1, 2, 3):
         _edit(d / "NRELOffshrBsline5MW_Onshore_ElastoDyn.dat", f"TipMass({k})", "250")
+    for k in (1, 2, 3):
+        _edit(d / "NRELOffshrBsline5MW_Onshore_ElastoDyn.dat", f"BlPitch({k})", "12")
     r = read_openfast(d / "NREL-5MW.fst")
+    assert r.turbine.rotor.pitch == pytest.approx(-np.radians(12.0))   # towards feather
     assert r.turbine.blade.tip_mass == 250.0
     assert any("250 kg point mass at the tip" in n for n in r.notes)
     assert not any("TipMass" in w for w in r.warnings)

@@ -36,7 +36,7 @@ class SpinningBlade:
         self.rotor_speed = check_rotor_speed(turbine.rotor.speed if rotor_speed is None
                                              else rotor_speed)
         n_el = check_elements(turbine.blade.elements if elements is None else elements)
-        self.beam = BeamElements(mesh_beam(turbine.blade, n_el))
+        self.beam = BeamElements(mesh_beam(turbine.blade, n_el, pitch=turbine.rotor.pitch))
         self.n = self.beam.n
         clamped = replace(turbine, rotor=replace(turbine.rotor, speed=self.rotor_speed),
                           hub=replace(turbine.hub, teeter=False, counterweight_mass=0.0),

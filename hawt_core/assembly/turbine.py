@@ -52,7 +52,7 @@ class TurbineModel:
         self.rotor_speed = float(turbine.rotor.speed)
         self.period = 2 * np.pi / self.rotor_speed if self.rotor_speed > 0 else np.inf
         self.rigid = RigidSystem(turbine)
-        self.beam = BeamElements(mesh_beam(turbine.blade))
+        self.beam = BeamElements(mesh_beam(turbine.blade, pitch=turbine.rotor.pitch))
         self.n_blades = int(turbine.rotor.blades)
         self.nq, self.nu = self.rigid.n_q, self.rigid.n_u
         #: the flexible tower's beam (None: rigid tower)

@@ -305,7 +305,9 @@ class BeamElements:
         """Dynamic states of one clamped beam: 2 per flexible section direction and element
         (a direction with zero compliance is a constraint whose section load is a Lagrange
         multiplier): 6N with rigid axial and shear directions, 12N with all six flexible."""
-        flexible = np.any(self.R != 0, axis=2).sum()       # nonzero compliance rows
+        # nonzero compliance rows in the section frames (the turned R mixes a rigid
+        # direction with a flexible one)
+        flexible = np.any(self.props.compliance != 0, axis=2).sum()
         return int(2 * flexible)
 
     def pattern_blocks(self):

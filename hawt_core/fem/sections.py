@@ -194,8 +194,13 @@ def reference_line(t: SectionTable, length: float, x: np.ndarray) -> Optional[np
     return out
 
 
-def mesh_beam(beam: Beam, elements: int | None = None) -> ElementProperties:
+def mesh_beam(beam: Beam, elements: int | None = None,
+              pitch: float = 0.0) -> ElementProperties:
     """Uniform mesh of ``elements`` (default ``beam.elements``) with averaged properties.
+
+    ``pitch`` [rad]: the beam turned as a rigid body about its root axis b1 (a blade's
+    collective pitch, model.Rotor): its reference line and every element's section frame
+    turned by rot1(pitch), so a prebent blade's bend turns with it.
 
     With prebend or sweep, the nodes sit on the reference line at equal spacing along b1;
     each element is the straight chord between its nodes (length ``h``), its section frame
@@ -211,12 +216,17 @@ def mesh_beam(beam: Beam, elements: int | None = None) -> ElementProperties:
     mass = element_average(st, station_mass(beam.sections), nodes)
     pos = reference_line(beam.sections, beam.length, nodes)
     tip = dict(tip_mass=float(beam.tip_mass), tip_inertia=tuple(map(float, beam.tip_inertia)))
-    if pos is None:
+    if pos is None and pitch == 0:
         return ElementProperties(nodes=nodes, h=np.diff(nodes), compliance=comp, mass=mass,
                                  **tip)
+    if pos is None:
+        pos = np.stack([nodes, 0 * nodes, 0 * nodes], -1)
     chord = np.diff(pos, axis=0)
     h = np.linalg.norm(chord, axis=1)
     frames = turn_e1_to(chord / h[:, None])
+    if pitch != 0:
+        P = rot1(float(pitch))
+        pos, frames = pos @ P.T, P @ frames
     # the section tables give properties per unit length of the line: the element's
     # chord carries them (the projected length along b1 would shorten it)
     return ElementProperties(nodes=nodes, h=h, compliance=comp, mass=mass, positions=pos,

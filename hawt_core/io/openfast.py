@@ -562,6 +562,13 @@ def read_openfast(path) -> ImportResult:
     if len(set(cones)) > 1:
         raise TurbineFileError(str(ed_file), [f"PreCone(1..{nb}) = {cones}: hawt's blades are "
                                               "identical; allowed: one precone for all"])
+    pitches = [deck.number("ElastoDyn", f"BlPitch{k}") for k in range(1, nb + 1)]
+    if len(set(pitches)) > 1:
+        raise TurbineFileError(str(ed_file), [f"BlPitch(1..{nb}) = {pitches}: hawt's blades "
+                                              "are identical; allowed: one pitch for all"])
+    if abs(pitches[0]) > 90:
+        raise TurbineFileError(str(ed_file), [f"BlPitch(1) = {pitches[0]}: allowed: -90 to "
+                                              "90 degrees"])
     tips = [deck.number("ElastoDyn", f"TipMass({k})", rule=">= 0") for k in range(1, nb + 1)]
     if len(set(tips)) > 1:
         raise TurbineFileError(str(ed_file), [f"TipMass(1..{nb}) = {tips}: hawt's blades are "
@@ -615,7 +622,8 @@ def read_openfast(path) -> ImportResult:
     g = deck.number(MAIN, "Gravity", rule=">= 0")
     name = fst.stem
     turbine = Turbine(name=name, rotor=Rotor(speed=rpm * math.pi / 30.0, blades=nb,
-                                             precone=math.radians(cones[0])),
+                                             precone=math.radians(cones[0]),
+                                             pitch=-math.radians(pitches[0])),
                       hub=hub, nacelle=nacelle, blade=blade, tower=tower,
                       gravity=Gravity(enabled=g > 0, g=g if g > 0 else 9.81),
                       drivetrain=_drivetrain(deck, ed_file, servo),

@@ -97,7 +97,8 @@ def dump_turbine(turbine: Turbine, header: str | None = None) -> str:
     r, h, n, g = turbine.rotor, turbine.hub, turbine.nacelle, turbine.gravity
     data = {
         "name": str(turbine.name),
-        "rotor": {"speed": float(r.speed), "blades": int(r.blades), "precone": float(r.precone)},
+        "rotor": {"speed": float(r.speed), "blades": int(r.blades), "precone": float(r.precone),
+                  **({"pitch": float(r.pitch)} if r.pitch else {})},
         "hub": {"radius": float(h.radius), "undersling": float(h.undersling),
                 "teeter": bool(h.teeter), "inertia_lateral": float(h.inertia_lateral),
                 "inertia_longitudinal": float(h.inertia_longitudinal),

@@ -129,7 +129,7 @@ _POLAR = {"name": True, "alpha": True, "cl": True, "cd": True, "cm": True,
           "reynolds": False, "thickness": False}
 _DRIVETRAIN = {"stiffness": False, "damping": False, "generator_inertia": False,
                "gearbox_ratio": False, "generator": False}
-_ROTOR = {"speed": True, "blades": True, "precone": False}
+_ROTOR = {"speed": True, "blades": True, "precone": False, "pitch": False}
 _HUB = {"radius": True, "undersling": False, "teeter": True, "inertia_lateral": True,
         "inertia_longitudinal": True, "teeter_stiffness": False, "teeter_damping": False,
         "mass": False, "counterweight_mass": False, "counterweight_radius": False}
@@ -376,7 +376,8 @@ def _build(c: _Checker, data: Any, default_name: str) -> Optional[Turbine]:
     if (r := c.mapping(data["rotor"], "rotor", _ROTOR) if "rotor" in data else None) is not None:
         rotor = dict(speed=c.number(r, "speed", "rotor", "> 0"),
                      blades=c.integer(r, "blades", "rotor", 1),
-                     precone=c.number(r, "precone", "rotor", "angle", 0.0))
+                     precone=c.number(r, "precone", "rotor", "angle", 0.0),
+                     pitch=c.number(r, "pitch", "rotor", "twist", 0.0))
     if (h := c.mapping(data["hub"], "hub", _HUB) if "hub" in data else None) is not None:
         hub = dict(radius=c.number(h, "radius", "hub", ">= 0"),
                    undersling=c.number(h, "undersling", "hub", "finite", 0.0),
