@@ -55,7 +55,11 @@ class SectionTable:
             turned by this angle about b1 (positive from b2 towards b3); the reference frame
             itself stays untwisted.
         cg_offset: (x2, x3) of the mass centre from the reference line [m], shape (ns, 2).
-        tension_offset: (x2, x3) of the tension centre (where EA acts) [m], shape (ns, 2).
+        tension_offset: (x2, x3) of the tension centre (where EA acts, and the bending
+            moments are taken about) [m], shape (ns, 2).
+        shear_offset: (x2, x3) of the shear centre (the torsional moment is taken about
+            it: a transverse force through the reference line twists the section) [m],
+            shape (ns, 2); None: at the tension centre.
         stiffness_6x6 / mass_6x6: optional full matrices, shape (ns, 6, 6), in frame b; when
             given they replace the matrices built from the scalar properties above.
         prebend, sweep: offsets of the reference line from the straight b1 axis along b3
@@ -80,6 +84,7 @@ class SectionTable:
     twist: Optional[np.ndarray] = None
     cg_offset: Optional[np.ndarray] = None
     tension_offset: Optional[np.ndarray] = None
+    shear_offset: Optional[np.ndarray] = None
     stiffness_6x6: Optional[np.ndarray] = None
     mass_6x6: Optional[np.ndarray] = None
     prebend: Optional[np.ndarray] = None
@@ -91,7 +96,7 @@ class SectionTable:
         for name in ("ea", "ga2", "ga3", "twist", "prebend", "sweep"):
             if getattr(self, name) is not None:
                 object.__setattr__(self, name, _frozen_array(getattr(self, name), 1))
-        for name in ("cg_offset", "tension_offset"):
+        for name in ("cg_offset", "tension_offset", "shear_offset"):
             if getattr(self, name) is not None:
                 object.__setattr__(self, name, _frozen_array(getattr(self, name), 2))
         for name in ("stiffness_6x6", "mass_6x6"):

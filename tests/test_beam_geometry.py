@@ -453,3 +453,28 @@ def test_mode_count_of_a_curved_pitched_blade_with_one_rigid_shear_direction():
     assert beam.dynamic_dimension() == 10 * 6
     r = blade_modes(T, 6)                         # the deflated pencil agrees (its own count)
     assert len(r.frequencies()) == 5 * 6
+
+
+# ---------------------------------------------------------------------------- shear centre
+@pytest.mark.parametrize("xs", [(0.15, 0.0), (0.0, -0.1), (0.08, 0.05)])
+def test_shear_centre_offset_twists_under_a_force_through_the_reference_line(xs):
+    """Reference: beam statics (linear; St-Venant torsion about the shear centre): a
+    cantilever whose shear centre sits at x_s = (x2s, x3s) from the reference line, loaded
+    at the tip by a force (0, P2, P3) through the reference line: the force's moment about
+    the shear centre, M1 = x3s P2 - x2s P3, twists it uniformly, tip twist
+    phi = M1 L / GJ (exact for the element: constant torque); turning about the shear
+    centre moves the reference line by phi e1 x (-x_s): the tip deflection differs from
+    the same beam's without the offset by (x3s phi, -x2s phi) (the bending part, and its
+    O(h^2) discretization error, cancel in the difference).  1e-9 relative."""
+    P2, P3 = 40.0, -70.0
+    tips = []
+    for off in (xs, (0.0, 0.0)):
+        sec = SectionTable(**uniform(2), shear_offset=np.tile(off, (2, 1)))
+        beam = BeamElements(mesh_beam(Beam(L, sec, 4)))
+        y = static_solve(beam, tip_force=np.array([0.0, P2, P3]), linear=True)
+        tips.append((y[-18 + 6:-18 + 9], y[-18 + 9:-18 + 12]))
+    (u, th), (u0, th0) = tips
+    phi = (xs[1] * P2 - xs[0] * P3) * L / TABLE1["gj"]
+    assert th[0] == pytest.approx(phi, rel=1e-9) and th0[0] == 0.0
+    np.testing.assert_allclose(u[1:] - u0[1:], [xs[1] * phi, -xs[0] * phi], rtol=1e-9,
+                               atol=1e-12)

@@ -45,11 +45,17 @@ def station_compliance(t: SectionTable) -> np.ndarray:
     xt = np.zeros((ns, 3))
     if t.tension_offset is not None:
         xt[:, 1:] = t.tension_offset
-    # [F; M]_principal = T [F; M]_reference: forces turned, moments about the tension centre.
+    # [F; M]_principal = T [F; M]_reference: forces turned, bending moments about the
+    # tension centre, the torsional moment about the shear centre (the tension centre when
+    # no shear centre is given): M1 - (x_s x F)_1
     T = np.zeros((ns, 6, 6))
     T[:, :3, :3] = R
     T[:, 3:, 3:] = R
     T[:, 3:, :3] = -R @ skew(xt)
+    if t.shear_offset is not None:
+        xs = np.zeros((ns, 3))
+        xs[:, 1:] = t.shear_offset
+        T[:, 3, :3] = -skew(xs)[:, 0, :]          # R leaves the torsion row alone
     return np.swapaxes(T, -1, -2) @ cp @ T
 
 
@@ -98,7 +104,7 @@ def sections_at(t: SectionTable, x: np.ndarray) -> SectionTable:
     the span fractions ``x``."""
     out = {"stations": x}
     for name in ("mass", "i1", "i2", "i3", "gj", "ei2", "ei3", "ea", "ga2", "ga3", "twist",
-                 "cg_offset", "tension_offset", "stiffness_6x6", "mass_6x6"):
+                 "cg_offset", "tension_offset", "shear_offset", "stiffness_6x6", "mass_6x6"):
         a = getattr(t, name)
         if a is None:
             out[name] = None

@@ -55,8 +55,8 @@ def _table_dict(t: SectionTable) -> dict:
                 continue
         if value is not None:
             out[key] = _compact(value)
-    for key in ("cg_offset", "tension_offset", "stiffness_6x6", "mass_6x6", "prebend",
-                "sweep"):
+    for key in ("cg_offset", "tension_offset", "shear_offset", "stiffness_6x6", "mass_6x6",
+                "prebend", "sweep"):
         value = getattr(t, key)
         if value is not None:
             out[key] = _compact(value)

@@ -151,7 +151,8 @@ MASS_PROPS = ("mass", "i1", "i2", "i3")          # replaced by mass_6x6 ...
 MASS_DIAGONAL = (0, 3, 4, 5)                     # ... diagonal entries holding them
 STIFF_PROPS = ("ea", "ga2", "ga3", "gj", "ei2", "ei3")  # replaced by stiffness_6x6 diagonal
 _SECTIONS = dict({"stations": True}, **{k: False for k in SCALAR_PROPS},
-                 cg_offset=False, tension_offset=False, stiffness_6x6=False, mass_6x6=False,
+                 cg_offset=False, tension_offset=False, shear_offset=False,
+                 stiffness_6x6=False, mass_6x6=False,
                  prebend=False, sweep=False)
 #: Offsets of a curved reference line, per station [m] (blades only).
 LINE_PROPS = ("prebend", "sweep")
@@ -181,7 +182,7 @@ def _section_table(c: _Checker, value: Any, path: str,
         elif key in MASS_PROPS and not has_m or key in ("gj", "ei2", "ei3") and not has_k:
             c.error(f"{path}.{key}", "required key is missing (or give the full "
                                      f"{'mass_6x6' if key in MASS_PROPS else 'stiffness_6x6'})")
-    for key in ("cg_offset", "tension_offset"):
+    for key in ("cg_offset", "tension_offset", "shear_offset"):
         if d.get(key) is not None:
             props[key] = c.pairs(d[key], f"{path}.{key}", ns)
     for key in LINE_PROPS:
@@ -199,10 +200,10 @@ def _section_table(c: _Checker, value: Any, path: str,
     if has_m and d.get("cg_offset") is not None:
         c.error(f"{path}.cg_offset", "cannot be combined with mass_6x6 (the matrix already "
                                      "holds the mass-centre offset)", d["cg_offset"])
-    if has_k and d.get("tension_offset") is not None:
-        c.error(f"{path}.tension_offset", "cannot be combined with stiffness_6x6 (the matrix "
-                                          "already holds the tension-centre offset)",
-                d["tension_offset"])
+    for key, what in (("tension_offset", "tension"), ("shear_offset", "shear")):
+        if has_k and d.get(key) is not None:
+            c.error(f"{path}.{key}", "cannot be combined with stiffness_6x6 (the matrix "
+                                     f"already holds the {what}-centre offset)", d[key])
     if has_k and has_m and d.get("twist") is not None:
         c.error(f"{path}.twist", "cannot be combined with both stiffness_6x6 and mass_6x6 "
                                  "(give the matrices in the untwisted reference frame)",
