@@ -61,20 +61,14 @@ class RotorGeometry:
         m_ty = (np.cross(r_ty, F) + M).sum(axis=0)         # moment about TY
         return float(m_ty @ y1), float(m_sh @ h2), float(m_sh @ s3)
 
-    def blade_points(self, named: dict, t: float, stations, u, frame: str = "nacelle",
+    def blade_points(self, named: dict, t: float, line, u, frame: str = "nacelle",
                      frames=None) -> np.ndarray:
         """Deformed reference-line points of every blade, (Nb, S, 3), in ``frame``
-        ('nacelle' or 'hub'). ``stations`` (Nb, S) span coordinates [m] of a straight
-        blade, or (Nb, S, 3) undeformed reference-line points in the root frames (a prebent
-        or swept blade); ``u`` (Nb, S, 3) displacements in the root frames. ``frames``: as
-        for :meth:`loads`."""
-        st = np.asarray(stations, float)
-        u = np.asarray(u, float)
-        local = u.copy()
-        if st.ndim == u.ndim:
-            local += st                                    # line point + displacement, in b
-        else:
-            local[..., 0] += st                            # b1 span + displacement, in b
+        ('nacelle' or 'hub'). ``line`` (Nb, S, 3): the undeformed reference-line points in
+        the root frames [m] (the simulation's ``positions``: ``(span, 0, 0)`` unless the
+        blade has prebend or sweep); ``u`` (Nb, S, 3) displacements in the root frames.
+        ``frames``: as for :meth:`loads`."""
+        local = np.asarray(line, float) + np.asarray(u, float)   # in b
         rih = self.rigid.root_in_hub                      # (Nb, 3, 3) b in h
         p_h = np.einsum("kij,ksj->ksi", rih, local) + self.rigid.root_offset_hub[:, None, :]
         if frame == "hub":

@@ -302,8 +302,8 @@ def test_rotor_loads_match_rigid_dynamics():
     # axis minus (y1.s2) times the teeter moment (kane.py)
     y1s2 = -math.sin(model.rigid.azimuth(t))
     assert gen[0] == pytest.approx(yaw_m - y1s2 * teeter_m, rel=1e-9, abs=1e-9)
-    pts = g.blade_points(named, t, np.tile(model.beam.props.nodes, (2, 1)), np.zeros((2, 3, 3)),
-                         "hub")
+    pts = g.blade_points(named, t, np.tile(model.beam.props.node_positions(), (2, 1, 1)),
+                         np.zeros((2, 3, 3)), "hub")
     tip = model.turbine.hub.radius + model.turbine.blade.length
     assert np.linalg.norm(pts[0, -1]) == pytest.approx(tip)
     assert np.allclose(pts[0, -1], -pts[1, -1])

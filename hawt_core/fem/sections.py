@@ -170,14 +170,19 @@ class ElementProperties:
         """(N+1, 3) undeformed node positions in the root frame b [m]."""
         if self.positions is not None:
             return np.asarray(self.positions, float)
-        x = np.asarray(self.nodes, float)
-        return np.stack([x, 0 * x, 0 * x], -1)
+        return straight_line(self.nodes)
 
     def element_frames(self) -> np.ndarray:
         """(N, 3, 3) element section frames in b (the identity for a straight beam)."""
         if self.frames is not None:
             return np.asarray(self.frames, float)
         return np.broadcast_to(np.eye(3), (self.n_elements, 3, 3))
+
+
+def straight_line(x) -> np.ndarray:
+    """Points (len(x), 3) ``(x, 0, 0)`` of the straight reference line along b1 [m]."""
+    x = np.asarray(x, float)
+    return np.stack([x, 0 * x, 0 * x], -1)
 
 
 def reference_line(t: SectionTable, length: float, x: np.ndarray) -> Optional[np.ndarray]:
@@ -210,9 +215,9 @@ def mesh_beam(beam: Beam, elements: int | None = None,
 
     With prebend or sweep, the nodes sit on the reference line at equal spacing along b1;
     each element is the straight chord between its nodes (length ``h``), its section frame
-    the smallest rotation of b turning b1 onto the chord (docs/theory.md, "Curved
-    reference line"): the polygon converges to the line at second order, like the
-    elements themselves."""
+    the smallest rotation of b turning b1 onto the chord (fem/beam.py, "Curved reference
+    line"): the polygon converges to the line at second order, like the elements
+    themselves."""
     n = int(beam.elements if elements is None else elements)
     if n < 1:
         raise ValueError(f"elements: {n} is not allowed; need an integer >= 1")
@@ -226,7 +231,7 @@ def mesh_beam(beam: Beam, elements: int | None = None,
         return ElementProperties(nodes=nodes, h=np.diff(nodes), compliance=comp, mass=mass,
                                  **tip)
     if pos is None:
-        pos = np.stack([nodes, 0 * nodes, 0 * nodes], -1)
+        pos = straight_line(nodes)
     chord = np.diff(pos, axis=0)
     h = np.linalg.norm(chord, axis=1)
     frames = turn_e1_to(chord / h[:, None])

@@ -82,30 +82,25 @@ class BladeAxis:
     ``points`` (K, 3): the axis in the IEC blade frame (x towards the suction side, i.e.
     downwind; y towards the trailing edge; z along the pitch axis), root first;
     ``parameter`` (K,): the coordinate the file's section stations refer to at those
-    points, 0 at the root and 1 at the tip (None: the polyline's normalized arc length).
+    points, 0 at the root and 1 at the tip.
     hawt's blade frame has b1 = z, b2 = -y, b3 = x (IEC_TO_HAWT), so the prebend (along b3)
     is x and the sweep (along b2) is -y, both from the root point.
     """
 
-    def __init__(self, points, parameter=None):
+    def __init__(self, points, parameter):
         p = np.asarray(points, float)
-        p = (p - p[0]) @ IEC_TO_HAWT.T
-        if parameter is None:
-            seg = np.linalg.norm(np.diff(p, axis=0), axis=1)
-            parameter = np.concatenate([[0.0], np.cumsum(seg)]) / seg.sum()
+        self.points = (p - p[0]) @ IEC_TO_HAWT.T
         self.parameter = np.asarray(parameter, float)
-        self.points = p
         #: span along b1 [m]
-        self.length = float(p[-1, 0])
-
-    @property
-    def curved(self) -> bool:
-        return bool(np.any(self.points[:, 1:] != 0))
+        self.length = float(self.points[-1, 0])
+        #: largest offset of the axis from the straight b1 line [m] (0: straight)
+        self.bend = float(np.abs(self.points[:, 1:]).max())
 
     def stations(self, s):
-        """hawt's station fractions (of the span along b1) and the (sweep, prebend) [m] at
-        the file's station coordinates ``s``: PCHIP along the axis (as WindIO asks), so
-        the line between its points stays smooth and never overshoots."""
+        """hawt's station fractions (of the span along b1) and the sweep and prebend [m]
+        (None, None for a straight axis) at the file's station coordinates ``s``: PCHIP
+        along the axis (as WindIO asks), so the line between its points stays smooth and
+        never overshoots."""
         from scipy.interpolate import PchipInterpolator
 
         s = np.asarray(s, float)
@@ -120,6 +115,8 @@ class BladeAxis:
             span = at[:, 0] / self.length
             span[s <= self.parameter[0]] = 0.0      # root and tip exactly (the end stations
             span[s >= self.parameter[-1]] = 1.0     # of the format), not to round-off
+        if self.bend == 0:
+            return span, None, None
         return span, at[:, 1], at[:, 2]
 
 

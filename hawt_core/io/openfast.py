@@ -393,9 +393,7 @@ def _blade_beamdyn(deck: _Deck, comp: dict, nb: int):
         deck.warnings.append(f"{Path(deck.sources['BeamDyn blade']).name}: damp_type = "
                              f"{damp} (structural damping) read but not modelled")
     return dict(stations=stations, K=K, M=M, twist=twist, length=length, file=bd_main,
-                curve=float(np.abs(kp[:, :2] - kp[0, :2]).max()),
-                prebend=prebend if axis.curved else None,
-                sweep=sweep if axis.curved else None)
+                curve=axis.bend, prebend=prebend, sweep=sweep)
 
 
 def _blade(deck: _Deck, comp: dict, ed_file: Path, nb: int, length: float) -> Beam:

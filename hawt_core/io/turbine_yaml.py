@@ -245,10 +245,11 @@ def _beam(c: _Checker, value: Any, path: str, spec: dict) -> Optional[Beam]:
         return None
     length = c.number(d, "length", path, "> 0")
     elements = c.integer(d, "elements", path, 1)
-    sections = (_section_table(c, d["sections"], f"{path}.sections", path != "tower")
+    blade = spec is _BEAM                  # prebend, sweep and a tip body: blades only
+    sections = (_section_table(c, d["sections"], f"{path}.sections", curved_line=blade)
                 if "sections" in d else None)
     tip = {}
-    if "tip_mass" in spec:
+    if blade:
         tip["tip_mass"] = c.number(d, "tip_mass", path, ">= 0", 0.0)
         tip["tip_inertia"] = _vector3(c, d, "tip_inertia", path,
                                       "[J1, J2, J3] in kg m^2")

@@ -6,7 +6,8 @@ What is read (WindIO 2.x; angles in degrees, rotor speeds in rpm, SI otherwise),
 
 - ``blade``: ``reference_axis`` (its z extent is the blade length; x and -y are the
   prebend and sweep of a curved reference line; the section grids are the axis curves'
-  parameter, so a station s sits at the axis point of parameter s), ``outer_shape.twist``, ``structure.elastic_properties``: the 6x6 stiffness
+  parameter, so a station s sits at the axis point of parameter s),
+  ``outer_shape.twist``, ``structure.elastic_properties``: the 6x6 stiffness
   (``stiffness_matrix`` K11..K66) and the mass matrix built from ``inertia_matrix`` (mass,
   cm_x, cm_y, i_edge, i_flap, i_plr, i_cp), both in the twisted section frame;
 - ``hub``: diameter (blade-root radius), cone_angle (precone), ``elastic_properties``
@@ -253,10 +254,9 @@ def _blade(f: _File) -> Beam:
     axis = BladeAxis(np.stack([np.interp(grid, *curves[a]) for a in ("x", "y", "z")], -1),
                      grid)
     length = axis.length
-    bend = float(np.abs(axis.points[:, 1:]).max())
-    if bend > 0:
-        f.notes.append(f"blade: prebend and sweep from {ref}.x, -{ref}.y (up to {bend:.3g} m;"
-                       " a curved reference line)")
+    if axis.bend > 0:
+        f.notes.append(f"blade: prebend and sweep from {ref}.x, -{ref}.y (up to "
+                       f"{axis.bend:.3g} m; a curved reference line)")
     sk, st = f"{key}.stiffness_matrix", f"{key}.inertia_matrix"
     gk, gm = f.grid(f"{sk}.grid"), f.grid(f"{st}.grid")
     stations = np.union1d(gk, gm)
@@ -300,8 +300,7 @@ def _blade(f: _File) -> Beam:
                    "blade frame)")
     span, sweep, prebend = axis.stations(stations)
     sec = sections_from_matrices(span, untwist_sections(K, twist), untwist_sections(M, twist),
-                                 prebend=prebend if axis.curved else None,
-                                 sweep=sweep if axis.curved else None)
+                                 prebend=prebend, sweep=sweep)
     return Beam(length=length, sections=sec, elements=ELEMENTS["blade"])
 
 
