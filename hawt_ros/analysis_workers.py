@@ -110,10 +110,16 @@ def result_to_plain(result) -> Dict[str, Any]:
             "compute_time": _num(getattr(result, "compute_time", math.nan))}
 
 
-def _die_with_parent() -> None:
-    """Make sure a worker never outlives the node (e.g. after a SIGKILL of the node): Linux
-    parent-death signal, plus a watchdog thread for other systems."""
-    parent = os.getppid()
+def _die_with_node(node_pid: int) -> None:
+    """Make sure a worker never outlives the node, even after a SIGKILL of the node.
+
+    The worker's parent is the forkserver, not the node, and the forkserver stays alive as
+    long as any of its children holds the "alive" pipe multiprocessing hands every child: so
+    watching the parent (PR_SET_PDEATHSIG, getppid) alone leaves the worker and the forkserver
+    running forever once the node is killed.  The worker therefore watches the node itself:
+    a pidfd (Linux >= 5.3) wakes a thread the instant the node ends; elsewhere the thread
+    polls the node's pid every 0.2 s.  Either way the worker exits, and the forkserver, its
+    last child gone, exits too.  PR_SET_PDEATHSIG stays for a forkserver that dies first."""
     try:
         import ctypes
 
@@ -121,22 +127,40 @@ def _die_with_parent() -> None:
         libc.prctl(1, signal.SIGKILL, 0, 0, 0)           # PR_SET_PDEATHSIG
     except Exception:  # noqa: BLE001 - not Linux
         pass
-    if os.getppid() != parent:
+
+    def node_alive() -> bool:
+        try:
+            os.kill(node_pid, 0)
+        except ProcessLookupError:
+            return False
+        except PermissionError:
+            return True
+        return True
+
+    pidfd = None
+    try:
+        pidfd = os.pidfd_open(node_pid)
+    except (AttributeError, OSError):
+        pass
+    if not node_alive():
         os._exit(1)
 
     def watch():
-        while True:
-            time.sleep(1.0)
-            if os.getppid() != parent:
-                os._exit(1)
+        if pidfd is not None:
+            import select
+            select.select([pidfd], [], [])               # readable when the node has ended
+            os._exit(1)
+        while node_alive():
+            time.sleep(0.2)
+        os._exit(1)
 
-    threading.Thread(target=watch, name="parent-watch", daemon=True).start()
+    threading.Thread(target=watch, name="node-watch", daemon=True).start()
 
 
-def _worker_main(conn, turbine, kwargs, cancel_event) -> None:
+def _worker_main(conn, turbine, kwargs, cancel_event, node_pid) -> None:
     """Entry point of an analysis worker process."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)     # the node decides when we stop
-    _die_with_parent()
+    _die_with_node(node_pid)
     try:  # background work: the node's real-time simulation wins any contention for a core
         os.nice(WORKER_NICE)
     except OSError:
@@ -329,7 +353,8 @@ class AnalysisRunner:
         parent, child = self._ctx.Pipe(duplex=False)
         cancel_ev = self._ctx.Event()
         proc = self._ctx.Process(target=_worker_main, name="hawt-modal-worker",
-                                 args=(child, self.turbine, job.kwargs, cancel_ev), daemon=True)
+                                 args=(child, self.turbine, job.kwargs, cancel_ev, os.getpid()),
+                                 daemon=True)
         proc.start()
         child.close()
         self._proc = proc

@@ -2,6 +2,9 @@
 ``call`` and ``echo`` (the ``ros2 bag`` / ``ros2 service call`` / ``ros2 topic echo`` a
 PyPI-only ROS 2 installation lacks, for hawt's needs).
 
+plus ``recover`` (a finalized copy of a crashed recording, as ``mcap recover`` /
+``ros2 bag reindex``).
+
 ``hawt`` finds these through the entry-point group ``hawt.commands`` (hawt_ros/commands.py);
 this module imports rclpy only inside the commands that talk to ROS (``hawt info`` works with
 the MCAP libraries alone).
@@ -9,6 +12,7 @@ the MCAP libraries alone).
     hawt record run.mcap [--topics /joint_states ...] [--duration S]
     hawt play run.mcap [--rate R] [--loop] [--wait-for-subscribers S]
     hawt info run.mcap [--json]
+    hawt recover run.mcap [-o run-recovered.mcap] [--force] [--json]
     hawt call modes [--elements N] [--rotor-speed W] [--steps K] [--method M] [--json] [--action]
     hawt echo /joint_states [--count K] [--json]
 """
@@ -33,6 +37,7 @@ HELP = {
     "record": "record live ROS 2 topics into an MCAP file (rosbag2 layout)",
     "play": "republish the messages of an MCAP file with their original timing",
     "info": "summarize an MCAP file (topics, types, counts, duration)",
+    "recover": "write a finalized copy of a crashed (unfinalized) MCAP recording",
     "call": "call the hawt node's modal_analysis service (or action) and print the modes",
     "echo": "print the messages arriving on a ROS 2 topic",
 }
@@ -179,6 +184,30 @@ def cmd_info(args) -> int:
 def _info_args(p):
     p.add_argument("file", metavar="FILE.mcap", help="MCAP file or rosbag2 folder")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
+
+
+# ============================================================================ recover
+def cmd_recover(args) -> int:
+    from .bag.recover import format_report, recover
+
+    try:
+        report = recover(args.file, args.output, overwrite=args.force)
+    except (FileNotFoundError, FileExistsError, ValueError, IsADirectoryError) as exc:
+        raise CliError(f"hawt recover: {exc}") from None
+    if args.json:
+        print(json.dumps(report.as_dict(), indent=1))
+    else:
+        print(format_report(report))
+    return 0
+
+
+def _recover_args(p):
+    p.add_argument("file", metavar="FILE.mcap", help="the crashed MCAP file (or bag folder)")
+    p.add_argument("--output", "-o", default=None, metavar="OUT.mcap",
+                   help="where to write the finalized copy (default: FILE-recovered.mcap "
+                        "beside FILE; never FILE itself)")
+    p.add_argument("--force", action="store_true", help="overwrite OUT.mcap if it exists")
+    p.add_argument("--json", action="store_true", help="print the report as JSON")
 
 
 # ============================================================================ record
@@ -535,7 +564,8 @@ def _echo_args(p):
 
 # ============================================================================ main
 _RUN = {"record": (cmd_record, _record_args), "play": (cmd_play, _play_args),
-        "info": (cmd_info, _info_args), "call": (cmd_call, _call_args),
+        "info": (cmd_info, _info_args), "recover": (cmd_recover, _recover_args),
+        "call": (cmd_call, _call_args),
         "echo": (cmd_echo, _echo_args)}
 
 

@@ -2,7 +2,9 @@
 
 Every error is a :class:`ParameterError` (a ``ValueError``) whose text names the parameter, the
 offending value and what is allowed, e.g.
-``step_deg: -1.0 is not allowed; need a finite number > 0 and <= 30 [deg]``.
+``step_deg: -1.0 is not allowed; need a finite number > 0 and <= 10 [deg of rotor azimuth]``.
+The limits are hawt_core.numerics.limits' (the same for the command line, the turbine file,
+the parameters and the requests).
 
 Used by :mod:`hawt_ros.node` for its ROS parameters (at start-up and on runtime changes) and
 for modal-analysis service/action requests, and by :mod:`hawt_ros.cli` for ``hawt call``.
@@ -19,7 +21,10 @@ __all__ = [
     "PERTURB_NAMES", "MARKER_FRAMES", "MAX_ELEMENTS", "MAX_STEPS", "ANALYSIS_METHODS",
 ]
 
-from hawt_core.analyses.modal import MAX_ELEMENTS, MAX_STEPS, MIN_STEPS
+from hawt_core.analyses.modal import MAX_STEPS, MIN_STEPS
+from hawt_core.numerics.checks import (STEP_DEG_ALLOWED, check_step_deg, elements_allowed,
+                                       rotor_speed_allowed)
+from hawt_core.numerics.limits import MAX_ELEMENTS, MAX_STEP_DEG
 from hawt_core.analyses.modal import METHODS as ANALYSIS_METHODS
 from hawt_core.analyses.modal import validate_request as _validate_analysis
 from hawt_core.solvers.march import PERTURBABLE as PERTURB_NAMES
@@ -46,7 +51,8 @@ PARAMETERS: Dict[str, Tuple[Any, str]] = {
                     "(hawt turbines); "
                     "'' = the shipped default (the paper's Table 1)"),
     "elements": (0, "beam elements per blade; 0 = the turbine file's value"),
-    "step_deg": (5.0, "simulation time step as rotor azimuth increment [deg], > 0 and <= 30"),
+    "step_deg": (5.0, "simulation time step as rotor azimuth increment [deg], > 0 and "
+                      f"<= {MAX_STEP_DEG:g}"),
     "publish_rate": (20.0, "publishing rate [Hz] (of simulation time when real_time_factor = 0)"),
     "real_time_factor": (1.0, "simulation time / wall-clock time; 0 = as fast as possible, "
                               "stamps in simulation time, /clock published"),
@@ -104,7 +110,6 @@ def parse_perturb(text: Any) -> Dict[str, float]:
 
 #: numeric parameters: (lower bound, lower bound allowed, upper bound, what is allowed)
 _RANGES = {
-    "step_deg": (0.0, False, 30.0, "need a finite number > 0 and <= 30 [deg of rotor azimuth]"),
     "publish_rate": (0.0, False, 1000.0, "need a finite number > 0 and <= 1000 [Hz]"),
     "real_time_factor": (0.0, True, 1000.0, "need a finite number >= 0 and <= 1000 "
                          "(1 = wall clock, 0 = as fast as possible)"),
@@ -121,10 +126,17 @@ def validate_parameter(name: str, value: Any) -> Any:
                                               "(string); '' = the default turbine")
         return value.strip()
     if name == "elements":
-        allowed = f"need an integer from 1 to {MAX_ELEMENTS}, or 0 = the turbine file's value"
+        allowed = f"{elements_allowed()}, or 0 = the turbine file's value"
         if not _is_int(value) or not 0 <= value <= MAX_ELEMENTS:
             raise ParameterError(name, value, allowed)
         return int(value)
+    if name == "step_deg":
+        if not _is_number(value):
+            raise ParameterError(name, value, STEP_DEG_ALLOWED)
+        try:
+            return check_step_deg(value)
+        except ValueError:
+            raise ParameterError(name, value, STEP_DEG_ALLOWED) from None
     if name in _RANGES:
         low, closed, high, allowed = _RANGES[name]
         x = _number(name, value, allowed)
@@ -181,9 +193,9 @@ def validate_request(rotor_speed: Any = 0.0, elements: Any = 0, steps: Any = 0,
     analysis' own (hawt_core.analyses.modal.validate_request); the node adds the
     conventions for 0 and '' to what is allowed."""
     allowed = {
-        "rotor_speed": "need a finite number > 0 and <= 1000 [rad/s], or 0 = the turbine's "
+        "rotor_speed": f"{rotor_speed_allowed(positive=True)}, or 0 = the turbine's "
                        "nominal speed",
-        "elements": f"need an integer from 1 to {MAX_ELEMENTS}, or 0 = the node's default",
+        "elements": f"{elements_allowed()}, or 0 = the node's default",
         "steps": f"need an integer from {MIN_STEPS} to {MAX_STEPS}, or 0 = the method's default",
         "method": f"choose one of {', '.join(ANALYSIS_METHODS)}, or '' = {default_method}"}
     given = {"rotor_speed": rotor_speed, "elements": elements, "steps": steps, "method": method}
@@ -192,8 +204,6 @@ def validate_request(rotor_speed: Any = 0.0, elements: Any = 0, steps: Any = 0,
             raise ParameterError(name, given[name], allowed[name])
     if not isinstance(method, str):
         raise ParameterError("method", method, allowed["method"])
-    if not (math.isfinite(float(rotor_speed)) and 0 <= rotor_speed <= 1000):
-        raise ParameterError("rotor_speed", rotor_speed, allowed["rotor_speed"])
     request = AnalysisRequest(elements=int(elements) if elements else (default_elements or None),
                               rotor_speed=float(rotor_speed) if rotor_speed else None,
                               steps=int(steps) if steps else None,

@@ -632,6 +632,97 @@ def test_sigkill_leaves_readable_mcap(spawn, tmp_path):
     st = {stamp_ns(m.message.header.stamp) for m in msgs}
     assert {stamp_ns(m.header.stamp) for m in before} <= st
 
+    # `hawt recover` makes it a file every reader opens, with every message hawt's reader
+    # recovered: counted by rosbags and by mcap-ros2-support against the subscriber's
+    fixed = tmp_path / "killed-fixed.mcap"
+    done = subprocess.run([str(HAWT_EXE), "recover", str(bag), "-o", str(fixed)],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+    from rosbags.highlevel import AnyReader
+    with AnyReader([fixed]) as reader:
+        rosbags_js = [reader.deserialize(raw, c.msgtype) for c, _t, raw in reader.messages()
+                      if c.topic == "/joint_states"]
+        rosbags_all = sum(1 for _ in reader.messages())
+    with open(fixed, "rb") as f:
+        decoded = [(ch.topic, m) for _s, ch, _msg, m in
+                   make_reader(f, decoder_factories=[DecoderFactory()]).iter_decoded_messages()]
+    assert len(rosbags_js) == len(msgs) == sum(1 for t, _ in decoded if t == "/joint_states")
+    assert rosbags_all == len(decoded) == info["message_count"]
+    got = {m.header.stamp.sec * 10**9 + m.header.stamp.nanosec for m in rosbags_js}
+    assert got == st
+    print(f"recovered: {len(rosbags_js)} joint states of {len(js)} received, "
+          f"{rosbags_all} messages in all")
+
+    # a node starting a recording in the same folder names the crashed file
+    other = tmp_path / "next.mcap"
+    node2, _ = spawn(dict(REAL_TIME, record=str(other)))
+    wait_until(lambda: "unfinalized recording" in node2.log(), 30.0,
+               what="the warning about the crashed recording")
+    log = node2.log()
+    assert "killed.mcap" in log and "hawt recover" in log
+
+
+def _descendants(pid: int) -> set:
+    """Pids of every live descendant of ``pid`` (from /proc: parent links)."""
+    parent = {}
+    for d in Path("/proc").iterdir():
+        if d.name.isdigit():
+            try:
+                stat = (d / "stat").read_text()
+            except OSError:
+                continue
+            fields = stat.rsplit(")", 1)[1].split()
+            if fields[0] != "Z":                       # a zombie has ended
+                parent[int(d.name)] = int(fields[1])
+    out, todo = set(), [pid]
+    while todo:
+        p = todo.pop()
+        kids = [c for c, pp in parent.items() if pp == p]
+        out.update(kids)
+        todo.extend(kids)
+    return out
+
+
+def _alive(pids) -> set:
+    out = set()
+    for p in pids:
+        try:
+            state = Path(f"/proc/{p}/stat").read_text().rsplit(")", 1)[1].split()[0]
+        except OSError:
+            continue
+        if state != "Z":
+            out.add(p)
+    return out
+
+
+@ros
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGKILL])
+def test_analysis_workers_end_with_the_node(spawn, sig):
+    """A node stopped (SIGTERM) or killed (SIGKILL) while an analysis runs in a worker
+    process leaves no process behind: every descendant (the forkserver and the worker) has
+    ended within 1 s of the node's exit."""
+    from rclpy.action import ActionClient
+    node, cli = spawn(REAL_TIME, fake="modal", env={"HAWT_FAKE_MODAL_SECONDS": "120"})
+    ac = ActionClient(cli.node, ModalAnalysisAction, "/modal_analysis")
+    assert ac.wait_for_server(timeout_sec=40.0), node.log()
+    fb = []
+    cli.result(ac.send_goal_async(ModalAnalysisAction.Goal(elements=2),
+                                  feedback_callback=lambda m: fb.append(m)), 20.0)
+    wait_until(lambda: len(fb) >= 2, 60.0, what="the worker's progress")
+    kids = _descendants(node.proc.pid)
+    assert kids, "no worker process found"
+    node.signal(sig)
+    node.wait(20)
+    t_exit = time.monotonic()
+    left = wait_until(lambda: not _alive(kids) or None, 5.0, step=0.02,
+                      what=f"the workers {sorted(_alive(kids))} to end") is None
+    took = time.monotonic() - t_exit
+    print(f"\n{signal.Signals(sig).name}: {len(kids)} descendant(s) ended {took:.2f} s after "
+          "the node")
+    assert not left and took < 1.0
+
 
 @ros
 def test_play_reproduces_topics(ros_env, tmp_path):
@@ -706,7 +797,18 @@ def test_record_info_echo_cli_from_live_topics(spawn, tmp_path):
 
 @ros
 def test_bad_parameters_exit_with_clear_errors(ros_env, tmp_path):
+    from hawt_core.io.turbine_yaml import default_turbine_path
+    hostile = tmp_path / "hostile.yaml"       # the file loader's limit, not a node-only one
+    hostile.write_text(default_turbine_path().read_text().replace("elements: 4",
+                                                                  "elements: 100000"))
+    huge = tmp_path / "huge.yaml"
+    huge.write_text(default_turbine_path().read_text().replace("speed: 6.02",
+                                                               "speed: 9" + "9" * 400))
     cases = [({"step_deg": -1.0}, ["step_deg", "-1.0", "not allowed", "> 0"]),
+             ({"step_deg": 30.0}, ["step_deg", "30.0", "<= 10"]),
+             ({"perturb": "teeter=1e9"}, ["perturb", "teeter", "-1 to 1 [rad]"]),
+             ({"turbine": str(hostile)}, ["hostile.yaml", "blade.elements", "MAX_ELEMENTS"]),
+             ({"turbine": str(huge)}, ["huge.yaml", "rotor.speed", "401 digits"]),
              ({"elements": "abc"}, ["elements", "'abc'", "integer"]),
              ({"perturb": "spin=1"}, ["perturb", "spin", "teeter"]),
              ({"turbine": str(tmp_path / "missing.yaml")}, ["turbine", "missing.yaml"]),
@@ -722,6 +824,26 @@ def test_bad_parameters_exit_with_clear_errors(ros_env, tmp_path):
         assert rc == 2, text
         for w in words:
             assert w in text, (w, text)
+
+
+@ros
+def test_sigint_during_a_long_start_up(ros_env, tmp_path):
+    """SIGINT while the node builds a big model (the IEA 15-MW at 512 elements per blade, tens
+    of seconds) stops it at once, with a message and status 130, leaving no process."""
+    node = NodeProcess(tmp_path, {"turbine": "iea15mw", "elements": 512}, domain_id())
+    try:
+        wait_until(lambda: "building its model" in node.log(), 60.0, what="the start-up log")
+        kids = _descendants(node.proc.pid)
+        t0 = time.monotonic()
+        node.signal(signal.SIGINT)
+        rc = node.wait(10)
+        took = time.monotonic() - t0
+    finally:
+        node.stop()
+    print(f"\nSIGINT during start-up: exit {rc} after {took:.2f} s")
+    assert rc == 130 and "during start-up" in node.log(), node.log()
+    assert took < 5.0
+    wait_until(lambda: not _alive(kids), 5.0, what="the forkserver to end")
 
 
 @ros

@@ -331,9 +331,14 @@ def test_bad_perturbation_and_newton_failure():
     sim = Simulator(model, step_deg=1.0, record=False)
     with pytest.raises(ValueError, match="duration"):
         sim.run(-1.0)
+    with pytest.raises(ValueError, match=r"perturb teeter: 3.0 .* from -1 to 1 \[rad\]"):
+        Simulator(model, perturb={"teeter": 3.0})          # beyond MAX_PERTURB_ANGLE
+    with pytest.raises(ValueError, match=r"step_deg: 30.0 .* <= 10"):
+        Simulator(model, step_deg=30.0)                    # beyond MAX_STEP_DEG
+    # the largest allowed perturbation and step with one Newton iteration: not converged
     with pytest.raises(SimulationError, match=r"step 1 from t = 0 s.*residual norm"):
-        Simulator(model, step_deg=1.0, perturb={"teeter": 3.0, "teeter_rate": 500.0},
-                  max_iter=2).step()
+        Simulator(model, step_deg=10.0, perturb={"teeter": 1.0, "teeter_rate": 2.0},
+                  max_iter=1).step()
 
 
 def test_outputs_csv(tmp_path):

@@ -35,7 +35,8 @@ from scipy.optimize import linear_sum_assignment
 
 from ..assembly import TurbineModel
 from ..model import Turbine
-from ..numerics.checks import check_elements
+from ..numerics.checks import check_elements, check_rotor_speed
+from ..numerics.limits import MAX_ELEMENTS
 from ..numerics.mac import mac_matrix
 from ..numerics.pencil import deflate_infinite, equilibrate
 from ..numerics.threads import blas_threads
@@ -88,9 +89,6 @@ MAX_STEPS = 1_000_000
 #: Most samples of the periodic eigenvectors per period (memory: samples x rows x modes).
 MAX_SAMPLES = 512
 
-#: Most finite elements per blade accepted by :func:`validate_request`.
-MAX_ELEMENTS = 512
-
 
 class Cancelled(RuntimeError):
     """The analysis was cancelled through the ``cancel`` callback."""
@@ -105,16 +103,9 @@ def validate_request(elements=None, rotor_speed=None, steps=None, method=None,
                      max_per_rev=None):
     """Check analysis overrides; raises ValueError naming the field, value and what's allowed."""
     if elements is not None:
-        if isinstance(elements, bool):      # check_elements would take True for 1
-            raise ValueError(f"elements: {elements!r} is not allowed; need an integer >= 1")
-        if check_elements(elements) > MAX_ELEMENTS:
-            raise ValueError(f"elements: {elements!r} is not allowed; need at most "
-                             f"{MAX_ELEMENTS} per blade")
+        check_elements(elements)
     if rotor_speed is not None:
-        r = float(rotor_speed)
-        if not np.isfinite(r) or r < 0:
-            raise ValueError(f"rotor_speed: {rotor_speed!r} is not allowed; need a finite "
-                             "number >= 0 [rad/s] (0: a standing rotor)")
+        check_rotor_speed(rotor_speed)
     if steps is not None:
         if isinstance(steps, bool) or not float(steps).is_integer() or not MIN_STEPS <= int(steps) <= MAX_STEPS:
             raise ValueError(f"steps: {steps!r} is not allowed; need an integer from {MIN_STEPS} "

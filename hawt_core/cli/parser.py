@@ -9,7 +9,11 @@ import argparse
 import math
 from typing import Callable, Optional
 
-__all__ = ['EXIT_USAGE', 'CliError', 'Parser', 'COMMANDS', 'command', 'positive_int', 'finite_float', 'turbine_arg', 'elements_arg', 'model_args', 'load', 'accuracy_type', 'refined_runner', 'with_accuracy', 'steps_type', 'per_rev', 'marching_args', 'speeds_type']
+__all__ = ['EXIT_USAGE', 'CliError', 'Parser', 'COMMANDS', 'command', 'positive_int',
+           'finite_float', 'checked', 'elements_type', 'rotor_speed_type', 'step_deg_type',
+           'turbine_arg', 'elements_arg', 'model_args', 'load', 'accuracy_type',
+           'refined_runner', 'with_accuracy', 'steps_type', 'per_rev', 'marching_args',
+           'speeds_type', 'MAX_SPEEDS']
 
 
 EXIT_USAGE = 2
@@ -72,7 +76,35 @@ def finite_float(field: str = "", minimum=None, unit: str = ""):
     return conv
 
 
-_rotor_speed = finite_float(minimum=0.0, unit="rad/s")
+def checked(validator: Callable):
+    """argparse type from one of hawt_core.numerics.checks' validators (the same check, and
+    the same allowed range, as the turbine file, the node's parameters and its requests):
+    the validator gets the text given; its message loses only its field name, which argparse
+    puts back as the option's."""
+    def conv(text: str):
+        try:
+            return validator(text)
+        except ValueError as e:
+            raise argparse.ArgumentTypeError(str(e).split(": ", 1)[-1]) from None
+    conv.__name__ = getattr(validator, "__name__", "value")
+    return conv
+
+
+def _checks():
+    from ..numerics import checks
+    return checks
+
+
+def elements_type(text: str) -> int:
+    return checked(_checks().check_elements)(text)
+
+
+def rotor_speed_type(text: str) -> float:
+    return checked(_checks().check_rotor_speed)(text)
+
+
+def step_deg_type(text: str) -> float:
+    return checked(_checks().check_step_deg)(text)
 
 
 def turbine_arg(p):
@@ -83,7 +115,7 @@ def turbine_arg(p):
 
 
 def elements_arg(p):
-    p.add_argument("--elements", "-n", type=positive_int, default=None, metavar="N",
+    p.add_argument("--elements", "-n", type=elements_type, default=None, metavar="N",
                    help="finite elements per blade (default: the turbine file's)")
 
 
@@ -103,7 +135,7 @@ def model_args(p):
     """The arguments every analysis takes: the turbine file and the usual overrides."""
     turbine_arg(p)
     elements_arg(p)
-    p.add_argument("--rotor-speed", type=_rotor_speed, default=None, metavar="RAD_PER_S",
+    p.add_argument("--rotor-speed", type=rotor_speed_type, default=None, metavar="RAD_PER_S",
                    help="rotor speed [rad/s] (default: the turbine file's)")
     p.add_argument("--accuracy", type=accuracy_type, default=None, metavar="TOL",
                    help="choose the mesh: raise the elements per blade (from --elements or "
@@ -151,9 +183,15 @@ def load(path):
 
 # ---------------------------------------------------------------------------- modes
 def steps_type(text: str) -> int:
-    v = positive_int(text)
-    if not 8 <= v <= 1_000_000:
-        raise argparse.ArgumentTypeError(f"{v} is not allowed; need an integer from 8 to 1000000")
+    """Marching steps per period: the analysis' own range (MIN_STEPS to MAX_STEPS)."""
+    from ..analyses.modal import MAX_STEPS, MIN_STEPS
+    try:
+        v = int(text)
+    except ValueError:
+        v = None
+    if v is None or not MIN_STEPS <= v <= MAX_STEPS:
+        raise argparse.ArgumentTypeError(f"{text!r} is not allowed; need an integer from "
+                                         f"{MIN_STEPS} to {MAX_STEPS}")
     return v
 
 
@@ -180,8 +218,14 @@ def marching_args(p):
 
 
 # ---------------------------------------------------------------------------- campbell
+#: Most rotor speeds of one Campbell sweep.
+MAX_SPEEDS = 1000
+
+
 def speeds_type(text: str):
-    """START:STOP:COUNT -> COUNT evenly spaced rotor speeds [rad/s]; errors name the field."""
+    """START:STOP:COUNT -> COUNT evenly spaced rotor speeds [rad/s], 0 < START < STOP <=
+    MAX_ROTOR_SPEED, 2 <= COUNT <= MAX_SPEEDS; errors name the field."""
+    from ..numerics.limits import MAX_ROTOR_SPEED
     parts = text.split(":")
     if len(parts) != 3:
         raise argparse.ArgumentTypeError(
@@ -192,13 +236,14 @@ def speeds_type(text: str):
         count = int(parts[2])
     except ValueError:
         count = 0
-    if count < 2:
+    if not 2 <= count <= MAX_SPEEDS:
         raise argparse.ArgumentTypeError(f"COUNT {parts[2]!r} is not allowed; need an "
-                                         "integer >= 2")
-    if start <= 0:
+                                         f"integer from 2 to {MAX_SPEEDS}")
+    if not 0 < start <= MAX_ROTOR_SPEED:
         raise argparse.ArgumentTypeError(f"START {parts[0]!r} is not allowed; need a number "
-                                         "> 0 [rad/s]")
-    if stop < start:
-        raise argparse.ArgumentTypeError(f"STOP {parts[1]!r} is not allowed; need STOP >= "
-                                         f"START ({parts[0]})")
+                                         f"> 0 and <= {MAX_ROTOR_SPEED:g} [rad/s]")
+    if not start < stop <= MAX_ROTOR_SPEED:
+        raise argparse.ArgumentTypeError(f"STOP {parts[1]!r} is not allowed; need START "
+                                         f"({parts[0]}) < STOP <= {MAX_ROTOR_SPEED:g} [rad/s] "
+                                         "(COUNT speeds from START to STOP)")
     return [start + (stop - start) * i / (count - 1) for i in range(count)]

@@ -4,7 +4,7 @@ imported when the command runs, so that ``import hawt_core.cli`` stays cheap).
 
 from __future__ import annotations
 
-from .parser import command, finite_float, load, positive_int, turbine_arg
+from .parser import command, elements_type, finite_float, load, step_deg_type, turbine_arg
 from .status import ProgressLine
 
 
@@ -18,7 +18,7 @@ def cmd_simulate(args) -> int:
     from ..numerics.checks import check_number
     from ..solvers.march import NAMED, Simulator, parse_perturb
     duration = check_number("duration", args.duration, minimum=0.0)
-    step_deg = check_number("step-deg", args.step_deg, positive=True)
+    step_deg = args.step_deg
     perturb = parse_perturb(args.perturb)
     if args.output and not args.output.lower().endswith((".csv", ".npz")):
         raise ValueError(f"output: {args.output!r} is not allowed; need a .csv or .npz file")
@@ -56,9 +56,9 @@ def _simulate_args(p):
     turbine_arg(p)
     p.add_argument("--duration", type=finite_float(), required=True, metavar="S",
                    help="simulated time [s]")
-    p.add_argument("--step-deg", type=finite_float(), default=1.0, metavar="DEG",
-                   help="time step in rotor azimuth [deg] (default 1)")
-    p.add_argument("--elements", "-n", type=positive_int, default=None, metavar="N",
+    p.add_argument("--step-deg", type=step_deg_type, default=1.0, metavar="DEG",
+                   help="time step in rotor azimuth [deg] (default 1, at most 10)")
+    p.add_argument("--elements", "-n", type=elements_type, default=None, metavar="N",
                    help="finite elements per blade (default: the turbine file's)")
     p.add_argument("--perturb", default=None, metavar="NAME=VALUE,...",
                    help="initial perturbations of yaw, yaw_rate, teeter, teeter_rate "

@@ -22,7 +22,8 @@ import warnings
 from pathlib import Path
 
 from ..model import Turbine
-from .turbine_yaml import TurbineFileError, TurbineFileWarning, default_turbine_path, load_turbine
+from .turbine_yaml import (TurbineFileError, TurbineFileWarning, check_regular_file,
+                           default_turbine_path, load_turbine)
 
 __all__ = ["SHIPPED", "shipped_path", "shipped_turbines", "load_any", "describe", "is_windio"]
 
@@ -84,6 +85,8 @@ def load_any(spec=None) -> Turbine:
     p = Path(text)
     if not p.exists() and text in SHIPPED:
         return load_turbine(shipped_path(text))
+    if p.exists():
+        check_regular_file(p)          # a FIFO or a huge file: refused before any reader opens it
     if p.suffix.lower() == ".fst":
         from .openfast import read_openfast
         return _imported(read_openfast(p))

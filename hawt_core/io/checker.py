@@ -11,6 +11,13 @@ from typing import Any, Optional
 
 import numpy as np
 
+from ..numerics.checks import short_repr
+from ..numerics.limits import MAX_STATIONS
+
+#: Most problems collected from one file (a hostile file may have millions); the rest are
+#: summarized in one line.
+MAX_MESSAGES = 50
+
 #: Relative tolerance for the symmetry of a 6x6 section matrix (scaled by its largest entry).
 SYMMETRY_TOLERANCE = 1e-9
 
@@ -39,15 +46,8 @@ def _rule_ok(x: float, rule: str) -> bool:
 
 
 def _show(value: Any) -> str:
-    """A short, readable rendering of an offending value."""
-    if isinstance(value, str):
-        text = repr(value)
-    elif isinstance(value, (float, np.floating)):
-        text = repr(float(value))
-    elif isinstance(value, np.ndarray):
-        text = np.array2string(value, threshold=8)
-    else:
-        text = repr(value)
+    """A short, readable rendering of an offending value (bounded work for any value)."""
+    text = short_repr(value)
     return text if len(text) <= 70 else text[:67] + "..."
 
 
@@ -90,11 +90,24 @@ class _Checker:
         self.errors: list = []
         self.warnings: list = []
 
+    @property
+    def full(self) -> bool:
+        """True once MAX_MESSAGES problems are collected (the rest are counted only)."""
+        return len(self.errors) >= MAX_MESSAGES
+
+    def add(self, message: str):
+        if len(self.errors) < MAX_MESSAGES:
+            self.errors.append(message)
+        elif len(self.errors) == MAX_MESSAGES:
+            self.errors.append(f"(more problems not listed: hawt stops after {MAX_MESSAGES})")
+
     def error(self, path: str, what: str, value: Any = ...):
-        if value is ...:
-            self.errors.append(f"{path}: {what}")
+        if self.full:
+            self.add("")
+        elif value is ...:
+            self.add(f"{path}: {what}")
         else:
-            self.errors.append(f"{path} = {_show(value)}: {what}")
+            self.add(f"{path} = {_show(value)}: {what}")
 
     # -- structure ---------------------------------------------------------------------------
     def mapping(self, value: Any, path: str, spec: dict) -> Optional[Mapping]:
@@ -113,6 +126,8 @@ class _Checker:
         return value
 
     def unknown_key(self, path: str, key: Any, spec: dict):
+        if self.full:
+            return self.add("")
         hint = ""
         close = difflib.get_close_matches(str(key), list(spec), n=1, cutoff=0.6)
         if isinstance(key, str) and key.endswith(("_deg", "_rpm", "_degrees")):
@@ -121,7 +136,7 @@ class _Checker:
                 hint = f"; angles and speeds are in radians (rad/s): use '{base}'"
         if not hint and close:
             hint = f"; did you mean '{close[0]}'?"
-        self.errors.append(f"{path}: unknown key{hint} (allowed: {', '.join(spec)})")
+        self.add(f"{path}: unknown key{hint} (allowed: {', '.join(spec)})")
 
     # -- scalars -----------------------------------------------------------------------------
     def number(self, d: Mapping, key: str, path: str, rule: str, default: Any = None):
@@ -136,7 +151,12 @@ class _Checker:
             kind = "a single number" if isinstance(value, (list, tuple, Mapping)) else "a number"
             self.error(path, f"must be {kind}, got {_type_name(value)}", value)
             return None
-        x = float(value)
+        try:
+            x = float(value)
+        except OverflowError:                  # an integer of hundreds of digits
+            self.error(path, f"must be a finite number (this integer has "
+                             f"{len(str(abs(value)))} digits)", value)
+            return None
         if math.isnan(x) or (math.isinf(x) and not allow_inf):
             self.error(path, "must be a finite number (NaN and infinity are not allowed)", value)
             return None
@@ -145,20 +165,33 @@ class _Checker:
             return None
         return x
 
-    def integer(self, d: Mapping, key: str, path: str, minimum: int):
+    def integer(self, d: Mapping, key: str, path: str, minimum: int,
+                maximum: Optional[int] = None, limit: str = ""):
+        """A whole number from ``minimum`` to ``maximum`` (the limit named ``limit``)."""
         p = f"{path}.{key}"
         if key not in d:
             return None
-        value = _plain(d[key])
+        value = given = _plain(d[key])
+        need = f"a whole number >= {minimum}" if maximum is None else \
+            f"a whole number from {minimum} to {maximum}" + (f" ({limit})" if limit else "")
         if isinstance(value, float) and math.isfinite(value) and value.is_integer():
             value = int(value)
         if not isinstance(value, int) or isinstance(value, bool):
-            self.error(p, f"must be a whole number >= {minimum}, got {_type_name(value)}", value)
+            self.error(p, f"must be {need}, got {_type_name(value)}", value)
             return None
-        if value < minimum:
-            self.error(p, f"must be a whole number >= {minimum}", value)
+        if value < minimum or maximum is not None and value > maximum:
+            self.error(p, f"must be {need}", given)
             return None
         return value
+
+    def short_list(self, value: list, path: str, limit: int = MAX_STATIONS,
+                   what: str = "values", name: str = "MAX_STATIONS") -> bool:
+        """False (with an error) when a list is longer than ``limit``: checked before any
+        per-entry work."""
+        if len(value) > limit:
+            self.error(path, f"has {len(value)} {what}; at most {limit} are allowed ({name})")
+            return False
+        return True
 
     def boolean(self, d: Mapping, key: str, path: str, default: Any = None):
         p = f"{path}.{key}"
@@ -176,6 +209,8 @@ class _Checker:
         if not isinstance(value, (list, tuple)):
             self.error(path, "must be a list of spanwise stations (fractions of the length, "
                              f"from 0 to 1), got {_type_name(value)}", value)
+            return None
+        if not self.short_list(value, path, what="stations"):
             return None
         xs = [self.number_value(_plain(v), f"{path}[{i}]", "finite") for i, v in enumerate(value)]
         if any(x is None for x in xs):
@@ -209,12 +244,14 @@ class _Checker:
             self.error(path, f"must be a number (uniform) or a list with one number per "
                              f"station, got {_type_name(value)}", value)
             return None
-        xs = [self.number_value(_plain(v), f"{path}[{i}]", rule) for i, v in enumerate(value)]
-        if ns is not None and len(xs) != ns:
-            self.error(path, f"has {len(xs)} values but there are {ns} stations (give one "
+        if ns is not None and len(value) != ns:       # before any per-entry work
+            self.error(path, f"has {len(value)} values but there are {ns} stations (give one "
                              "value per station, or a single number for a uniform property)",
                        value)
             return None
+        if not self.short_list(value, path):
+            return None
+        xs = [self.number_value(_plain(v), f"{path}[{i}]", rule) for i, v in enumerate(value)]
         if ns is None or any(x is None for x in xs):
             return None
         return np.array(xs)
@@ -225,6 +262,8 @@ class _Checker:
         what = "must be one [x2, x3] pair (uniform) or a list of [x2, x3] pairs, one per station"
         if not isinstance(value, (list, tuple)) or len(value) == 0:
             self.error(path, f"{what}, got {_type_name(value)}", value)
+            return None
+        if not self.short_list(value, path, what="pairs"):
             return None
         if all(_is_number(_plain(v)) for v in value):
             if len(value) != 2:
@@ -265,6 +304,8 @@ class _Checker:
         if d == 2:
             mats, single = [value], True
         elif d == 3:
+            if not self.short_list(value, path, what="matrices"):
+                return None
             mats, single = list(value), False
         else:
             self.error(path, "must be one 6x6 matrix (a list of 6 rows of 6 numbers) or a "

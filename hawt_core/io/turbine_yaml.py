@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 import re
+import stat
 import warnings
 from collections.abc import Mapping
 from pathlib import Path
@@ -29,13 +30,16 @@ from typing import Any, Optional
 import numpy as np
 import yaml
 
+from ..numerics.limits import (MAX_BLADES, MAX_ELEMENTS, MAX_FILE_BYTES, MAX_POLAR_ANGLES,
+                               MAX_POLARS, MAX_ROTOR_SPEED, MAX_SCALAR_CHARS, MAX_YAML_DEPTH,
+                               MAX_YAML_VALUES)
 from ..model import (GENERATOR_MODES, Aerodynamics, Beam, Drivetrain, Gravity, Hub, Nacelle,
                      Polar, Rotor, SectionTable, Turbine)
 from .checker import _Checker, _plain, _show, _type_name
 
 __all__ = [
     "TurbineFileError", "TurbineFileWarning", "load_turbine", "turbine_from_dict",
-    "default_turbine_path", "I1_TOLERANCE",
+    "default_turbine_path", "I1_TOLERANCE", "check_regular_file", "read_bounded",
 ]
 
 #: Relative tolerance on ``I1 = I2 + I3`` before a TurbineFileWarning is issued.
@@ -43,12 +47,15 @@ I1_TOLERANCE = 0.01
 
 
 class TurbineFileError(ValueError):
-    """A turbine file (or dict) that cannot be loaded.
+    """A turbine file (or dict) that cannot be loaded (the message shows the first SHOWN
+    problems; ``errors`` has them all).
 
     Attributes:
         source: the file path (or ``"<dict>"``) the problem is in.
         errors: list of messages, each ``"<dotted.path> = <value>: <what is allowed>"``.
     """
+
+    SHOWN = 20
 
     def __init__(self, source: str, errors: list):
         self.source = str(source)
@@ -56,8 +63,11 @@ class TurbineFileError(ValueError):
         if len(self.errors) == 1:
             text = f"{self.source}: {self.errors[0]}"
         else:
+            shown = self.errors[:self.SHOWN]
             text = f"{self.source}: {len(self.errors)} problems:\n" + "\n".join(
-                f"  - {e}" for e in self.errors)
+                f"  - {e}" for e in shown)
+            if len(self.errors) > len(shown):
+                text += f"\n  ... and {len(self.errors) - len(shown)} more"
         super().__init__(text)
 
 
@@ -106,8 +116,52 @@ def _construct_mapping(loader, node, deep=False):
 _Loader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_mapping)
 
 
+def _prescan(text: str, source: str) -> None:
+    """Refuse, before anything is built, YAML that would take unbounded time or memory: nesting
+    deeper than MAX_YAML_DEPTH, more than MAX_YAML_VALUES values once every alias is expanded
+    (the "billion laughs" bomb: a few lines that expand to 10^9 values), a value longer than
+    MAX_SCALAR_CHARS.  One pass over libyaml's events, counting each anchored node's expanded
+    size once, so the pass itself is linear in the file's length."""
+    counts = [0]                          # expanded values under each open collection
+    anchors = []                          # the anchor of each open collection
+    expanded = {}                         # anchor -> expanded value count
+    for event in yaml.parse(text, Loader=_Loader):
+        kind = type(event)
+        if kind is yaml.ScalarEvent:
+            if len(event.value) > MAX_SCALAR_CHARS:
+                raise TurbineFileError(source, [
+                    f"line {event.start_mark.line + 1}: a value of {len(event.value)} "
+                    f"characters; at most {MAX_SCALAR_CHARS} are allowed (MAX_SCALAR_CHARS)"])
+            n = 1
+            if event.anchor:
+                expanded[event.anchor] = 1
+        elif kind is yaml.AliasEvent:
+            n = expanded.get(event.anchor, 1)
+        elif kind in (yaml.SequenceStartEvent, yaml.MappingStartEvent):
+            if len(counts) > MAX_YAML_DEPTH:
+                raise TurbineFileError(source, [
+                    f"line {event.start_mark.line + 1}: lists and mappings nested more than "
+                    f"{MAX_YAML_DEPTH} deep (MAX_YAML_DEPTH); a turbine file needs 5"])
+            counts.append(0)
+            anchors.append(event.anchor)
+            continue
+        elif kind in (yaml.SequenceEndEvent, yaml.MappingEndEvent):
+            n = counts.pop()
+            anchor = anchors.pop()
+            if anchor:
+                expanded[anchor] = n
+        else:
+            continue
+        counts[-1] += n
+        if counts[-1] > MAX_YAML_VALUES:
+            raise TurbineFileError(source, [
+                f"line {event.start_mark.line + 1}: more than {MAX_YAML_VALUES} values with "
+                "every alias (*name) expanded (MAX_YAML_VALUES); is it an alias bomb?"])
+
+
 def _parse_yaml(text: str, source: str):
     try:
+        _prescan(text, source)
         return yaml.load(text, Loader=_Loader)
     except yaml.YAMLError as exc:
         where = ""
@@ -115,6 +169,9 @@ def _parse_yaml(text: str, source: str):
         if mark is not None:
             where = f" at line {mark.line + 1}, column {mark.column + 1}"
         problem = getattr(exc, "problem", None) or str(exc)
+        if "nesting depth" in problem:     # libyaml's own stop, met before the prescan's
+            problem = (f"lists and mappings nested more than {MAX_YAML_DEPTH} deep "
+                       "(MAX_YAML_DEPTH); a turbine file needs 5")
         raise TurbineFileError(source, [f"not valid YAML{where}: {problem}"]) from None
 
 
@@ -244,7 +301,7 @@ def _beam(c: _Checker, value: Any, path: str, spec: dict) -> Optional[Beam]:
     if d is None:
         return None
     length = c.number(d, "length", path, "> 0")
-    elements = c.integer(d, "elements", path, 1)
+    elements = c.integer(d, "elements", path, 1, MAX_ELEMENTS, "MAX_ELEMENTS")
     blade = spec is _BEAM                  # prebend, sweep and a tip body: blades only
     sections = (_section_table(c, d["sections"], f"{path}.sections", curved_line=blade)
                 if "sections" in d else None)
@@ -304,7 +361,7 @@ def _polar(c: _Checker, value: Any, path: str) -> Optional[Polar]:
     if not isinstance(raw, (list, tuple)):
         if "alpha" in d:
             c.error(f"{path}.alpha", "must be a list of angles of attack [rad]", raw)
-    else:
+    elif c.short_list(raw, f"{path}.alpha", MAX_POLAR_ANGLES, "angles", "MAX_POLAR_ANGLES"):
         alpha = c.per_station(raw, f"{path}.alpha", len(raw), "finite")
     na = None
     if alpha is not None:
@@ -338,6 +395,8 @@ def _aerodynamics(c: _Checker, value: Any) -> Optional[Aerodynamics]:
         c.error(f"{path}.polars", "must be a list of airfoil polars (at least one)",
                 d.get("polars"))
         polars = []
+    if not c.short_list(polars, f"{path}.polars", MAX_POLARS, "polars", "MAX_POLARS"):
+        polars = []
     polars = [_polar(c, p, f"{path}.polars[{i}]") for i, p in enumerate(polars)]
     parts = {k: c.per_station(d[k], f"{path}.{k}", ns, rule) for k, rule in
              (("chord", "> 0"), ("twist", "finite"), ("ac_prebend", "finite"),
@@ -365,7 +424,7 @@ def _aerodynamics(c: _Checker, value: Any) -> Optional[Aerodynamics]:
 
 def _build(c: _Checker, data: Any, default_name: str) -> Optional[Turbine]:
     if not isinstance(data, Mapping):
-        c.errors.append(f"the turbine must be a mapping with the sections {', '.join(_TOP)}; "
+        c.add(f"the turbine must be a mapping with the sections {', '.join(_TOP)}; "
                         f"got {_type_name(data)}: {_show(data)}")
         return None
     c.mapping(data, "", _TOP)
@@ -377,9 +436,13 @@ def _build(c: _Checker, data: Any, default_name: str) -> Optional[Turbine]:
     rotor = hub = nacelle = None
     if (r := c.mapping(data["rotor"], "rotor", _ROTOR) if "rotor" in data else None) is not None:
         rotor = dict(speed=c.number(r, "speed", "rotor", "> 0"),
-                     blades=c.integer(r, "blades", "rotor", 1),
+                     blades=c.integer(r, "blades", "rotor", 1, MAX_BLADES, "MAX_BLADES"),
                      precone=c.number(r, "precone", "rotor", "angle", 0.0),
                      pitch=c.number(r, "pitch", "rotor", "twist", 0.0))
+        if rotor["speed"] is not None and rotor["speed"] > MAX_ROTOR_SPEED:
+            c.error("rotor.speed", f"must be > 0 and <= {MAX_ROTOR_SPEED:g} [rad/s] "
+                                   "(MAX_ROTOR_SPEED); speeds are in rad/s", r["speed"])
+            rotor["speed"] = None
     if (h := c.mapping(data["hub"], "hub", _HUB) if "hub" in data else None) is not None:
         hub = dict(radius=c.number(h, "radius", "hub", ">= 0"),
                    undersling=c.number(h, "undersling", "hub", "finite", 0.0),
@@ -476,6 +539,39 @@ def turbine_from_dict(d: Mapping, source: str = "<dict>", *, _default_name: str 
     return turbine
 
 
+def check_regular_file(p: Path, max_bytes: int = MAX_FILE_BYTES) -> None:
+    """Refuse what is not a regular file of at most ``max_bytes`` (MAX_FILE_BYTES) before it
+    is opened: opening a FIFO blocks until a writer comes, a device never ends."""
+    try:
+        st = p.stat()
+    except FileNotFoundError:
+        raise TurbineFileError(str(p), ["file not found"]) from None
+    except OSError as exc:
+        raise TurbineFileError(str(p), [f"cannot read the file: {exc}"]) from None
+    if stat.S_ISDIR(st.st_mode):
+        raise TurbineFileError(str(p), ["is a folder, not a turbine file"])
+    if not stat.S_ISREG(st.st_mode):
+        raise TurbineFileError(str(p), ["is not a regular file (a FIFO, socket or device); "
+                                        "give a turbine file"])
+    if st.st_size > max_bytes:
+        raise TurbineFileError(str(p), [f"the file has {st.st_size} bytes; at most "
+                                        f"{max_bytes} are allowed (MAX_FILE_BYTES)"])
+
+
+def read_bounded(p: Path, max_bytes: int = MAX_FILE_BYTES) -> str:
+    """The text (UTF-8) of a regular file of at most ``max_bytes``; TurbineFileError else."""
+    check_regular_file(p, max_bytes)
+    try:
+        with open(p, "rb") as f:
+            raw = f.read(max_bytes + 1)       # the file may have grown since stat()
+        if len(raw) > max_bytes:
+            raise TurbineFileError(str(p), [f"the file has more than {max_bytes} bytes "
+                                            "(MAX_FILE_BYTES)"])
+        return raw.decode("utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise TurbineFileError(str(p), [f"cannot read the file: {exc}"]) from None
+
+
 def load_turbine(path=None) -> Turbine:
     """Load a turbine file (YAML). ``None`` loads the shipped default (the paper's Table 1
     turbine); a mapping is validated like a file (see :func:`turbine_from_dict`).
@@ -485,13 +581,7 @@ def load_turbine(path=None) -> Turbine:
     if isinstance(path, Mapping):
         return turbine_from_dict(path, _stacklevel=3)
     p = default_turbine_path() if path is None else Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise TurbineFileError(str(p), ["file not found"]) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise TurbineFileError(str(p), [f"cannot read the file: {exc}"]) from None
-    data = _parse_yaml(text, str(p))
+    data = _parse_yaml(read_bounded(p), str(p))
     if data is None:
         raise TurbineFileError(str(p), ["the file is empty"])
     return turbine_from_dict(data, str(p), _default_name=p.stem, _stacklevel=3)

@@ -306,19 +306,22 @@ class BagWriter:
         return {t.name: t.type_name for t in self._topics.values()}
 
     def add_topic(self, topic: str, type_name: str, qos: Any = None,
-                  definition: Optional[str] = None) -> None:
+                  definition: Optional[str] = None, type_hash: Optional[str] = None) -> None:
         """Register a topic (done implicitly by the first write). ``qos``: the offered QoS
-        (rclpy QoSProfile, a rosbag2-style dict, a list of those, or None)."""
+        (rclpy QoSProfile, a rosbag2-style dict, a list of those, or None); ``definition``
+        and ``type_hash``: the schema text and RIHS01 hash when known (a recovered file's),
+        else found from the type's ``.msg`` files."""
         if not self._acquire():
             raise ValueError("BagWriter is closed")
         try:
-            self._add_topic(topic, type_name, qos, definition)
+            self._add_topic(topic, type_name, qos, definition, type_hash)
             self._stream.commit()
         finally:
             self._release()
 
     def _add_topic(self, topic: str, type_name: str, qos: Any = None,
-                   definition: Optional[str] = None) -> _Topic:
+                   definition: Optional[str] = None,
+                   thash: Optional[str] = None) -> _Topic:
         existing = self._topics.get(topic)
         type_name = normalize_type(type_name)
         if existing is not None:
@@ -334,7 +337,8 @@ class BagWriter:
                                                    definition.encode())
             self._schemas[type_name] = schema_id
         qos_list = [qos_dict(q) for q in qos] if isinstance(qos, (list, tuple)) else [qos_dict(qos)]
-        thash = type_hash(type_name, self.extra_msg_paths)
+        if thash is None:
+            thash = type_hash(type_name, self.extra_msg_paths)
         metadata = {"offered_qos_profiles": yaml_text(qos_list).strip()}
         if thash:
             metadata["topic_type_hash"] = thash

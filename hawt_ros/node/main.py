@@ -69,10 +69,13 @@ def main(argv: Optional[List[str]] = None) -> int:
 
     stop = threading.Event()
     received = []
+    starting = [True]
 
     def on_signal(signum, _frame):
         received.append(signum)
         stop.set()
+        if starting[0]:      # interrupt a long start-up (a big turbine's mesh and steady state)
+            raise KeyboardInterrupt
 
     # `kill -USR1 <pid>` prints every thread's Python stack to stderr (diagnosing a hang)
     import faulthandler
@@ -89,9 +92,15 @@ def main(argv: Optional[List[str]] = None) -> int:
     try:
         try:
             node = HawtNode()
+            starting[0] = False
         except StartupError as exc:
             sys.stderr.write(f"hawt-node: {exc}\n")
             return 2
+        except KeyboardInterrupt:
+            starting[0] = False
+            name = signal.Signals(received[0]).name if received else "SIGINT"
+            sys.stderr.write(f"hawt-node: {name} during start-up: stopped\n")
+            return 130
         executor = MultiThreadedExecutor(num_threads=EXECUTOR_THREADS)
         executor.add_node(node)
 

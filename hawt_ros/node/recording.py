@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Optional
 
-from ..bag import BagWriter, type_name_of
+from ..bag import BagWriter, type_name_of, unfinalized_recordings
 from .config import STATE_QOS
 
 __all__ = ["Recording"]
@@ -28,10 +28,27 @@ class Recording:
                     "publish_rate": s.publish_rate, "real_time_factor": s.real_time_factor,
                     "perturb": dict(s.perturb), "marker_frame": s.marker_frame,
                     "simulation": self.sim_source}
+        self._name_crashed_recordings(p.parent)
         self.recorder = BagWriter(p, turbine_yaml=turbine_yaml, settings=settings)
         for pub in self._publishers_list():
             self.recorder.add_topic(pub.topic_name, type_name_of(pub.msg_type), qos=STATE_QOS)
         self.record_path = str(p)
+
+    def _name_crashed_recordings(self, folder: Path) -> None:
+        """Warn about the unfinalized recordings (a node killed, a machine that lost power)
+        in the folder the new recording goes to, and say how to recover them."""
+        try:
+            crashed = unfinalized_recordings(folder)
+        except OSError:
+            return
+        if not crashed:
+            return
+        names = ", ".join(p.name for p in crashed[:5]) + (
+            f" and {len(crashed) - 5} more" if len(crashed) > 5 else "")
+        self.get_logger().warning(
+            f"{len(crashed)} unfinalized recording(s) in {folder} (a node was killed?): "
+            f"{names}; other readers need them finalized: hawt recover {crashed[0]} "
+            "(writes <name>-recovered.mcap)")
 
     def _stop_recording(self, failure: Optional[str] = None) -> None:
         """Drop the recorder and clear ``record_path`` and ``settings.record`` (so setting

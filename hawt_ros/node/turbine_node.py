@@ -90,6 +90,10 @@ class HawtNode(Pacing, StatePublisher, Recording, AnalysisServer, Node):
             self.turbine_path = str(shipped_path(path))
         else:
             self.turbine_path = str(Path(path).resolve())
+        self.get_logger().info(
+            f"turbine '{self.turbine.name}' read; building its model "
+            f"({self.settings.elements or self.turbine.blade.elements} elements per blade) and "
+            "the steady state (Ctrl-C stops)")
         try:
             self.model = TurbineModel(self.turbine, elements=self.settings.elements or None)
         except (ValueError, NotImplementedError) as exc:

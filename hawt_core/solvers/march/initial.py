@@ -13,7 +13,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spl
 
 from ...fem.beam import BLOCK_SIZE, ROOT_SIZE
-from ...numerics.checks import check_number
+from ...numerics.checks import check_perturbation_value
 
 __all__ = ['NAMED', 'PERTURBABLE', 'SimulationError', 'parse_perturb', 'consistent_state']
 
@@ -30,17 +30,19 @@ PERTURBABLE = ("yaw", "yaw_rate", "teeter", "teeter_rate")
 
 
 def check_perturbation(name, value) -> float:
-    """One perturbation: ``name`` in PERTURBABLE, ``value`` a finite number."""
+    """One perturbation: ``name`` in PERTURBABLE, ``value`` a finite number within
+    MAX_PERTURB_ANGLE [rad] (MAX_PERTURB_RATE [rad/s] for a rate)."""
     if name not in PERTURBABLE:
         raise ValueError(f"perturb: unknown name {name!r}; allowed: {', '.join(PERTURBABLE)}")
-    return check_number(f"perturb {name}", value)
+    return check_perturbation_value(name, value)
 
 
 def parse_perturb(text: str) -> dict:
     """``"teeter=0.02,yaw_rate=0.01"`` -> ``{"teeter": 0.02, "yaw_rate": 0.01}`` [rad, rad/s].
 
     Items separated by commas, semicolons or blanks; names from PERTURBABLE, each once;
-    values finite numbers. ``None`` or blank: no perturbation."""
+    values finite numbers within the limits of check_perturbation. ``None`` or blank: no
+    perturbation."""
     out = {}
     if text is None:
         return out

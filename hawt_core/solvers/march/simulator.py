@@ -44,7 +44,7 @@ from typing import Callable, Optional
 
 import numpy as np
 
-from ...numerics.checks import check_number
+from ...numerics.checks import check_number, check_step_deg
 from ...numerics.jacobian import ColouredJacobian
 from ...numerics.threads import blas_threads
 from ..steady import constant_steady_state
@@ -100,7 +100,7 @@ class Simulator(StepSolver, SimulationOutputs):
         if step_seconds is not None:
             h = check_number("step_seconds", step_seconds, positive=True)
         else:
-            deg = check_number("step_deg", step_deg, positive=True)
+            deg = check_step_deg(step_deg)
             if omega <= 0:
                 raise ValueError("step_deg: the rotor does not spin; give step_seconds instead")
             h = math.radians(deg) / omega
