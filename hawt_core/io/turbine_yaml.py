@@ -125,6 +125,7 @@ def _prescan(text: str, source: str) -> None:
     counts = [0]                          # expanded values under each open collection
     anchors = []                          # the anchor of each open collection
     expanded = {}                         # anchor -> expanded value count
+    aliases = False
     for event in yaml.parse(text, Loader=_Loader):
         kind = type(event)
         if kind is yaml.ScalarEvent:
@@ -137,6 +138,7 @@ def _prescan(text: str, source: str) -> None:
                 expanded[event.anchor] = 1
         elif kind is yaml.AliasEvent:
             n = expanded.get(event.anchor, 1)
+            aliases = True
         elif kind in (yaml.SequenceStartEvent, yaml.MappingStartEvent):
             if len(counts) > MAX_YAML_DEPTH:
                 raise TurbineFileError(source, [
@@ -155,8 +157,9 @@ def _prescan(text: str, source: str) -> None:
         counts[-1] += n
         if counts[-1] > MAX_YAML_VALUES:
             raise TurbineFileError(source, [
-                f"line {event.start_mark.line + 1}: more than {MAX_YAML_VALUES} values with "
-                "every alias (*name) expanded (MAX_YAML_VALUES); is it an alias bomb?"])
+                f"line {event.start_mark.line + 1}: more than {MAX_YAML_VALUES} values "
+                "(MAX_YAML_VALUES)" + ("; each alias (*name) counts as all the values it "
+                                       "stands for: is it an alias bomb?" if aliases else "")])
 
 
 def _parse_yaml(text: str, source: str):
@@ -562,8 +565,12 @@ def read_bounded(p: Path, max_bytes: int = MAX_FILE_BYTES) -> str:
     """The text (UTF-8) of a regular file of at most ``max_bytes``; TurbineFileError else."""
     check_regular_file(p, max_bytes)
     try:
-        with open(p, "rb") as f:
-            raw = f.read(max_bytes + 1)       # the file may have grown since stat()
+        parts, size = [], 0
+        with open(p, "rb") as f:              # in pieces: the file may grow after stat()
+            while size <= max_bytes and (piece := f.read(1 << 20)):
+                parts.append(piece)
+                size += len(piece)
+        raw = b"".join(parts)
         if len(raw) > max_bytes:
             raise TurbineFileError(str(p), [f"the file has more than {max_bytes} bytes "
                                             "(MAX_FILE_BYTES)"])
