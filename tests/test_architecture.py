@@ -21,7 +21,7 @@ ROOT = Path(__file__).resolve().parents[1]
 CORE_LAYERS = [
     ("numerics",),
     ("model", "io"),
-    ("fem", "rigid"),
+    ("fem", "rigid", "aero"),
     ("assembly",),
     ("solvers",),
     ("results",),

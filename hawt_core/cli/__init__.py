@@ -1,7 +1,8 @@
 """The ``hawt`` console script.
 
 Each subcommand is a small function ``cmd_<name>(args) -> int`` plus an argument-adding
-function, registered with ``@command`` (cli/parser.py) in cli/commands.py and cli/simulate.py.
+function, registered with ``@command`` (cli/parser.py) in cli/commands.py, cli/simulate.py,
+cli/turbines.py and cli/aero.py.
 Errors in the input (bad file, bad arguments, a model that does not converge) print ONE line to
 stderr and exit with status 2; no traceback.  Other packages add subcommands through the
 entry-point group ``hawt.commands`` (hawt_ros: record, play, info, call, echo): each entry
@@ -16,6 +17,7 @@ import warnings
 from importlib.metadata import entry_points
 
 from . import commands as _commands  # noqa: F401  (registers blade-modes, modes, campbell)
+from . import aero as _aero  # noqa: F401  (registers aero-table)
 from . import simulate as _simulate  # noqa: F401  (registers simulate)
 from . import turbines as _turbines  # noqa: F401  (registers turbines, import)
 from .parser import COMMANDS, EXIT_USAGE, CliError, Parser
