@@ -324,3 +324,26 @@ class Turbine:
 
     def with_elements(self, n: int) -> "Turbine":
         return replace(self, blade=replace(self.blade, elements=int(n)))
+
+
+@dataclass(frozen=True, eq=False)
+class Wing:
+    """A cantilever wing in a uniform stream (the classic aeroelastic benchmark cases, run with
+    the turbine's beam and airfoil models; assembly/wing.py).
+
+    ``beam``: the wing as a Beam (b1 along the span, b2 chordwise towards the leading edge,
+    b3 normal to the chord; the reference line is the elastic axis); ``chord`` [m];
+    ``elastic_axis``: the reference line's position as a fraction of the chord from the
+    leading edge; ``density`` [kg/m^3] of the air; ``lift_slope`` [1/rad]."""
+
+    name: str
+    beam: Beam
+    chord: float
+    elastic_axis: float
+    density: float = 1.225
+    lift_slope: float = 2.0 * np.pi
+
+    @property
+    def axis_semichords(self) -> float:
+        """The elastic axis aft of mid-chord in semi-chords (Theodorsen's a)."""
+        return 2.0 * self.elastic_axis - 1.0

@@ -85,14 +85,15 @@ def downwash_34(speed, alpha, h_rate, alpha_rate, semichord, a):
     return speed * alpha + h_rate + semichord * (0.5 - a) * alpha_rate
 
 
-def thin_airfoil_loads(rho, speed, semichord, a, h_acc, alpha_rate, alpha_acc, w_eff):
+def thin_airfoil_loads(rho, speed, semichord, a, h_acc, alpha_rate, alpha_acc, w_eff,
+                       lift_slope=2.0 * np.pi):
     """Lift [N/m] (up) and moment about the axis at ``a`` [N m/m] (nose up) per unit span
-    from Theodorsen's thin-airfoil theory with the circulatory part driven by ``w_eff``."""
+    from Theodorsen's thin-airfoil theory with the circulatory part driven by ``w_eff``;
+    ``lift_slope`` [1/rad] replaces thin-airfoil theory's 2 pi in the circulatory part."""
     b = semichord
     nc = np.pi * rho * b * b
-    lift = nc * (h_acc + speed * alpha_rate - b * a * alpha_acc) \
-        + 2.0 * np.pi * rho * speed * b * w_eff
+    circulatory = lift_slope * rho * speed * b * w_eff
+    lift = nc * (h_acc + speed * alpha_rate - b * a * alpha_acc) + circulatory
     moment = nc * (b * a * h_acc - speed * b * (0.5 - a) * alpha_rate
-                   - b * b * (0.125 + a * a) * alpha_acc) \
-        + 2.0 * np.pi * rho * speed * b * b * (a + 0.5) * w_eff
+                   - b * b * (0.125 + a * a) * alpha_acc) + b * (a + 0.5) * circulatory
     return lift, moment

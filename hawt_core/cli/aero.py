@@ -1,4 +1,5 @@
-"""The aerodynamic subcommands of ``hawt``: ``aero-table`` (rigid-rotor Cp, Ct, Cq surfaces)."""
+"""The aerodynamic subcommands of ``hawt``: ``aero-table`` (rigid-rotor Cp, Ct, Cq surfaces) and
+``flutter`` (a cantilever wing's flutter and divergence speeds)."""
 
 from __future__ import annotations
 
@@ -91,3 +92,70 @@ def _aero_table_args(p):
                    help="write ROSCO's Cp_Ct_Cq text file")
     p.add_argument("--plot", metavar="FILE.png", default=None,
                    help="write Cp and Ct contours to this PNG file")
+
+
+#: Wing cases shipped with hawt: name -> file in hawt_core/data.
+SHIPPED_WINGS = {"goland": "goland_wing.yaml"}
+
+
+def load_wing_case(spec: str):
+    """A model.Wing from a wing file or a shipped wing name."""
+    from pathlib import Path
+    from ..io.wing_yaml import is_wing_file, load_wing
+    p = Path(spec)
+    if not p.exists() and spec in SHIPPED_WINGS:
+        p = Path(__file__).resolve().parent.parent / "data" / SHIPPED_WINGS[spec]
+    elif not p.exists():
+        raise ValueError(f"CASE: {spec!r} is not a wing file nor a shipped wing case "
+                         f"({', '.join(SHIPPED_WINGS)})")
+    elif not is_wing_file(p):
+        raise ValueError(f"CASE: {spec!r} is not a wing file (its first key is not 'wing'); "
+                         "the flutter of a whole turbine needs the turbine's aerodynamic "
+                         "coupling, which hawt does not have yet")
+    return load_wing(p)
+
+
+@command("flutter", help="flutter and divergence speeds of a cantilever wing (strip theory)",
+         description="Aeroelastic modes of a cantilever wing in a uniform stream (hawt's beam "
+                     "elements, Theodorsen's strip loads with Wagner's lag as states) against "
+                     "the flow speed: the lowest speed at which a mode's damping crosses "
+                     "zero, with its frequency, and the static divergence speed. CASE: a wing "
+                     "file or a shipped case (goland).")
+def cmd_flutter(args) -> int:
+    from ..analyses.flutter import flutter
+    from .status import ProgressLine
+    wing = load_wing_case(args.case)
+    status = ProgressLine(not args.json)
+    try:
+        result = flutter(wing, args.speeds, elements=args.elements, modes=args.modes,
+                         unsteady=not args.quasi_steady, progress=status)
+    finally:
+        status.close()
+    if args.plot:
+        result.plot(args.plot)
+    if args.json:
+        print(result.to_json())
+    else:
+        print(result.table())
+        if args.plot:
+            print(f"picture written to {args.plot}")
+    return 0
+
+
+@cmd_flutter.arguments
+def _flutter_args(p):
+    from .parser import elements_type, positive_int
+    p.add_argument("case", metavar="CASE", help="a wing file (docs/aerodynamics.md) or a "
+                   f"shipped case: {', '.join(SHIPPED_WINGS)}")
+    p.add_argument("--speeds", type=grid_type("--speeds", 1e-3, 1e4, "m/s"),
+                   default="20:200:19", metavar="START:STOP:COUNT",
+                   help="flow speeds [m/s] (default 20:200:19)")
+    p.add_argument("--elements", "-n", type=elements_type, default=None, metavar="N",
+                   help="finite elements (default: the case file's)")
+    p.add_argument("--modes", type=positive_int, default=4, metavar="K",
+                   help="lowest oscillatory modes to follow (default 4)")
+    p.add_argument("--quasi-steady", action="store_true",
+                   help="no Wagner lag (C(k) = 1); the added-mass loads remain")
+    p.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    p.add_argument("--plot", metavar="FILE.png", default=None,
+                   help="write frequency and damping against speed to this PNG file")

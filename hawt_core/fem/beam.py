@@ -161,7 +161,8 @@ class BeamElements:
         self._t = self.tangent[:, None, :]                         # (N, 1, 3)
         self._t4 = self.tangent[:, None, None, :]                  # (N, 1, 1, 3)
 
-    def residual(self, yd, y, v, w, g=None, tip_force=None, tip_moment=None):
+    def residual(self, yd, y, v, w, g=None, tip_force=None, tip_moment=None, wind=None,
+                 section_loads=None):
         """Residual (B, n) of B beams.
 
         yd, y: (B, n) time derivative and value of the unknowns.
@@ -170,6 +171,14 @@ class BeamElements:
         g: (B, 3) gravity vector in the root frame [m/s^2] or None.
         tip_force, tip_moment: (B, 3) loads applied at the tip, in the tip section frame B
             (for a curved beam: b turned by the tip's rotation theta).
+        wind: (B, 3) a uniform air velocity in the root frame [m/s] or None; it reaches
+            ``section_loads`` in each Gauss point's section frame.
+        section_loads: None, or ``f(sections) -> (force, moment)``, distributed loads per
+            unit length [N/m, N m/m] at the Gauss points (N, G, B, 3), section-frame (turned-b)
+            components, acting at the reference line; ``sections`` is a dict of the Gauss-point
+            arrays (N, G, B, 3) ``V``, ``Omega`` (section velocities), ``Vdot``,
+            ``Omegadot`` (their rates) and ``wind`` (the air velocity in the section frame,
+            None without ``wind``).  Aerodynamic loads enter the one residual this way.
 
         Fused implementation (about 70 NumPy calls whatever B and N, every product a single
         BLAS call or N of them): Gauss-point arrays are laid out (element, Gauss point, beam,
@@ -180,7 +189,7 @@ class BeamElements:
         tests/test_beam_reference.py compares it with the original term-by-term version.
         """
         B, n, N = y.shape[0], self.n, self.N
-        dt = np.result_type(y, yd, v, w, *(a for a in (g, tip_force, tip_moment)
+        dt = np.result_type(y, yd, v, w, *(a for a in (g, tip_force, tip_moment, wind)
                                            if a is not None))
         Y = np.empty((B, 2 * n + 1), dtype=np.result_type(y, yd))
         Y[:, :n] = y
@@ -223,21 +232,26 @@ class BeamElements:
                      (N, G, B, 6))
         VP = cross(Vg[..., :, None], P[..., None, :], (N, G, B, 3))
 
-        # rotations at the Gauss points: C^T V, C^T (e1 + gam), C w [, C g]
+        # rotations at the Gauss points: C^T V, C^T (e1 + gam), C w [, C g] [, C wind]
         grav = g is not None
-        nT = 4 if grav else 3
+        airy = wind is not None
+        nT = 3 + grav + airy
         T = np.empty((N, G, B, nT, 3), dtype=dt)
         T[..., 0, :] = Vg
         T[..., 1, :] = e1g[:, None]
         T[..., 2, :] = w
         if grav:
             T[..., 3, :] = g
+        if airy:
+            T[..., nT - 1, :] = wind
         th1 = thg[..., None, :]                                 # (N, G, B, 1, 3)
         thT = cross(th1[..., :, None], T[..., None, :], T.shape)
         dots = dot(T, th1)[..., None]                           # (N, G, B, nT, 1)
         ss = (0.25 * dot(thg, thg))[..., None, None]            # (N, G, B, 1, 1)
-        rT = (((1 - ss) * T + (self._sgn4 if grav else self._sgn3) * thT + 0.5 * th1 * dots)
-              / (1 + ss))
+        sgn = self._sgn4 if grav else self._sgn3
+        if airy:
+            sgn = np.concatenate([sgn, [[-1.0]]])
+        rT = (((1 - ss) * T + sgn * thT + 0.5 * th1 * dots) / (1 + ss))
         # Q [Om - C w, kap]
         T2 = np.empty((N, G, B, 2, 3), dtype=dt)
         np.subtract(Omg, rT[..., 2, :], out=T2[..., 0, :])
@@ -255,6 +269,12 @@ class BeamElements:
             gB = rT[..., 3, :]
             t[..., 0:3] -= self._mpl * gB
             t[..., 3:6] -= cross(self._mxi4, gB[..., None, :], gB.shape)
+        if section_loads is not None:
+            force, moment = section_loads({
+                "V": Vg, "Omega": Omg, "Vdot": a[..., 18:21], "Omegadot": a[..., 21:24],
+                "wind": rT[..., nT - 1, :] if airy else None})
+            t[..., 0:3] -= force
+            t[..., 3:6] -= moment
         np.negative(t, out=I[..., 0:6])
         wxp = cross(w[:, :, None], (ug + self._X0)[..., None, :], (N, G, B, 3))
         I[..., 6:9] = (udg - rT[..., 0, :]) + v + wxp
