@@ -10,14 +10,13 @@ hold exactly those, byte for byte, and every reader must count the same number.
 from __future__ import annotations
 
 import json
-import signal
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
 
-from test_msgs_mcap import T0, WRITER_CHILD, rosbags_read, run_child, wait_for_line
+from test_msgs_mcap import T0, killed_writer, rosbags_read
 
 from hawt_ros.bag import BagReader, BagWriter, bag_info, recover, unfinalized_recordings
 from hawt_ros.bag.reader import Scan, scan_records
@@ -30,15 +29,7 @@ HAWT_EXE = Path(sys.executable).parent / "hawt"
 @pytest.fixture(scope="module")
 def crashed(tmp_path_factory):
     """An MCAP file whose writer was killed with SIGKILL while writing."""
-    path = tmp_path_factory.mktemp("crash") / "killed.mcap"
-    proc = run_child(WRITER_CHILD, path, "kill")
-    try:
-        wait_for_line(proc, "WRITING")
-        proc.send_signal(signal.SIGKILL)
-        proc.wait(timeout=30)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
+    path = killed_writer(tmp_path_factory.mktemp("crash") / "killed.mcap")
     assert not is_finalized(path)
     return path
 

@@ -456,8 +456,8 @@ while True:                                # keep writing until killed
 """
 
 
-def test_sigkill_keeps_all_but_the_last_chunk(tmp_path):
-    path = tmp_path / "killed.mcap"
+def killed_writer(path):
+    """Run WRITER_CHILD into ``path`` and SIGKILL it while it writes."""
     proc = run_child(WRITER_CHILD, path, "kill")
     try:
         wait_for_line(proc, "WRITING")
@@ -466,6 +466,11 @@ def test_sigkill_keeps_all_but_the_last_chunk(tmp_path):
     finally:
         if proc.poll() is None:
             proc.kill()
+    return path
+
+
+def test_sigkill_keeps_all_but_the_last_chunk(tmp_path):
+    path = killed_writer(tmp_path / "killed.mcap")
     reader = BagReader(path)
     got = [(m.log_time, list(m.message.position)) for m in reader]
     assert not reader.finalized

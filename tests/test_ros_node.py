@@ -347,11 +347,17 @@ def test_publishes_joint_states_blades_markers_at_rate(spawn):
     bd = cli.subscribe(BladeDeflection, "/blade_deflections")
     mk = cli.subscribe(MarkerArray, "/blade_markers")
     first_message(node, js)
-    rate, window = publish_rate(js, len(js), 3.0, node)        # a 3 s window
-    print(f"\njoint_states: {rate:.2f} Hz over {window:.2f} s (requested 10 Hz)")
-    assert 7.0 <= rate <= 13.0, node.log()
+    start = len(js)
+    rate, window = publish_rate(js, start, 3.0, node)        # a 3 s window
     msgs = js.msgs()
     stamps = [stamp_ns(m.header.stamp) for m in msgs]
+    # the node's own rate: its wall-clock stamps (the receive times also hold the test
+    # process's scheduling, which a long suite on two cores crowds)
+    sent = stamps[start:]
+    stamped = (len(sent) - 1) / ((sent[-1] - sent[0]) * 1e-9)
+    print(f"\njoint_states: stamped {stamped:.2f} Hz, received {rate:.2f} Hz over "
+          f"{window:.2f} s (requested 10 Hz)")
+    assert 7.0 <= stamped <= 13.0, node.log()
     assert all(b > a for a, b in zip(stamps, stamps[1:])), "stamps not strictly increasing"
     m = msgs[-1]
     assert list(m.name) == ["yaw", "teeter", "rotor_azimuth"]
