@@ -37,11 +37,12 @@ BUHL_INDUCTION = 0.4
 
 def momentum_thrust(a, F=1.0):
     """Local thrust coefficient of an annulus with axial induction a and loss factor F:
-    momentum theory 4 a F (1 - a) up to a = 0.4, Buhl's empirical parabola beyond."""
-    a = np.asarray(a, float)
-    F = np.asarray(F, float)
+    momentum theory 4 a F (1 - a) up to a = 0.4, Buhl's empirical parabola beyond (C1 at
+    the switch; complex-step safe: the branch is chosen by the real part)."""
+    a = np.asarray(a)
+    F = np.asarray(F)
     buhl = 8.0 / 9.0 + (4.0 * F - 40.0 / 9.0) * a + (50.0 / 9.0 - 4.0 * F) * a * a
-    return np.where(a <= BUHL_INDUCTION, 4.0 * a * F * (1.0 - a), buhl)
+    return np.where(np.real(a) <= BUHL_INDUCTION, 4.0 * a * F * (1.0 - a), buhl)
 
 
 def axial_induction(k, F, phi_positive=True):

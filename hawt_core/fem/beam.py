@@ -171,8 +171,9 @@ class BeamElements:
         g: (B, 3) gravity vector in the root frame [m/s^2] or None.
         tip_force, tip_moment: (B, 3) loads applied at the tip, in the tip section frame B
             (for a curved beam: b turned by the tip's rotation theta).
-        wind: (B, 3) a uniform air velocity in the root frame [m/s] or None; it reaches
-            ``section_loads`` in each Gauss point's section frame.
+        wind: (B, 3) a uniform air velocity in the root frame [m/s], or (B, m, 3) several
+            root-frame vectors, or None; it reaches ``section_loads`` in each Gauss point's
+            section frame ((N, G, B, 3) or (N, G, B, m, 3)).
         section_loads: None, or ``f(sections) -> (force, moment)``, distributed loads per
             unit length [N/m, N m/m] at the Gauss points (N, G, B, 3), section-frame (turned-b)
             components, acting at the reference line; ``sections`` is a dict of the Gauss-point
@@ -235,7 +236,9 @@ class BeamElements:
         # rotations at the Gauss points: C^T V, C^T (e1 + gam), C w [, C g] [, C wind]
         grav = g is not None
         airy = wind is not None
-        nT = 3 + grav + airy
+        several = airy and np.ndim(wind) == 3
+        m_wind = (np.shape(wind)[1] if several else 1) if airy else 0
+        nT = 3 + grav + m_wind
         T = np.empty((N, G, B, nT, 3), dtype=dt)
         T[..., 0, :] = Vg
         T[..., 1, :] = e1g[:, None]
@@ -243,14 +246,14 @@ class BeamElements:
         if grav:
             T[..., 3, :] = g
         if airy:
-            T[..., nT - 1, :] = wind
+            T[..., nT - m_wind:, :] = wind if several else wind[:, None, :]
         th1 = thg[..., None, :]                                 # (N, G, B, 1, 3)
         thT = cross(th1[..., :, None], T[..., None, :], T.shape)
         dots = dot(T, th1)[..., None]                           # (N, G, B, nT, 1)
         ss = (0.25 * dot(thg, thg))[..., None, None]            # (N, G, B, 1, 1)
         sgn = self._sgn4 if grav else self._sgn3
         if airy:
-            sgn = np.concatenate([sgn, [[-1.0]]])
+            sgn = np.concatenate([sgn, -np.ones((m_wind, 1))])
         rT = (((1 - ss) * T + sgn * thT + 0.5 * th1 * dots) / (1 + ss))
         # Q [Om - C w, kap]
         T2 = np.empty((N, G, B, 2, 3), dtype=dt)
@@ -272,7 +275,8 @@ class BeamElements:
         if section_loads is not None:
             force, moment = section_loads({
                 "V": Vg, "Omega": Omg, "Vdot": a[..., 18:21], "Omegadot": a[..., 21:24],
-                "wind": rT[..., nT - 1, :] if airy else None})
+                "wind": (rT[..., nT - m_wind:, :] if several else rT[..., nT - 1, :])
+                if airy else None})
             t[..., 0:3] -= force
             t[..., 3:6] -= moment
         np.negative(t, out=I[..., 0:6])

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["LEVI_CIVITA_9", "cross", "dot", "matvec", "skew", "rot1", "rot2", "rot3",
-           "turn_e1_to", "tip_basis", "rot_apply", "rot_T_apply", "q_apply"]
+           "turn_e1_to", "tip_basis", "rot_apply", "rot_T_apply", "q_apply", "atan2"]
 
 
 def _levi_civita_9() -> np.ndarray:
@@ -125,3 +125,13 @@ def q_apply(theta, a):
     """``Q(theta) a = (I + theta~/2 + theta theta^T/4) a``: Omega = Q(theta) theta_dot-like map
     of the Rodrigues parameters' kinematics."""
     return a + 0.5 * cross(theta, a) + 0.25 * theta * dot(theta, a)[..., None]
+
+
+def atan2(y, x):
+    """atan2(y, x) that accepts complex-step arguments (NumPy's arctan2 does not): the
+    quadrant from the real parts, the value from arctan(y / x), exact to first order in
+    the imaginary parts (x must not vanish)."""
+    y, x = np.asarray(y), np.asarray(x)
+    base = np.arctan(y / x)
+    turn = np.where(np.real(x) < 0, np.where(np.real(y) >= 0, np.pi, -np.pi), 0.0)
+    return base + turn

@@ -1,0 +1,177 @@
+"""One blade on the hub spinning in a uniform axial wind, with blade-element momentum loads at
+its Gauss points: the first aeroelastic model of a rotor blade (the SpinningBlade of the
+blade-modes analysis with aerodynamics), for its steady state.
+
+At each Gauss point of the beam, in the deformed section frame B (which carries the pitch, the
+elastic twist and the bending slopes), the air velocity relative to the section is
+
+    W = U (1 - a) s3 - a' Omega r t - V
+
+with s3 the shaft axis (the wind's direction, downwind), t = b2 the direction of the blade's
+motion, r the distance from the shaft, V the section's velocity (its rotation and its
+deformation rates) and a, a' the axial and tangential inductions, two algebraic unknowns per
+Gauss point.  In B's chord plane (B2, B3): the inflow angle phi_B = atan2(W3, -W2), the angle
+of attack alpha = phi_B + tau (tau the aerodynamic twist, hawt's sign: AeroDyn's -BlTwist;
+the pitch is in B), q = rho (W2^2 + W3^2) / 2; lift along (W3, -W2)/|W|, drag along W, the
+pitching moment c_m q c^2 about B1, all at the reference line (the aerodynamic centre's offset
+is not modelled yet).  The inductions satisfy the momentum balance of their annulus with the
+blade's own loads (thrust along s3, driving force along t, per unit annulus radius):
+
+    B N_s3 / cos(precone) = momentum_thrust(a, F) (rho U^2 / 2) 2 pi r
+    B T_t r / cos(precone) = 4 a' (1 - a) F rho U Omega pi r^3
+
+with Prandtl's tip and hub loss F of the inflow angle in the rotor frame and Buhl's
+high-induction thrust beyond a = 0.4: Ning's BEM equations, here solved together with the
+beam (one residual, complex-step Jacobians).  For a rigid blade they are those of
+aero/bem.py's BemRotor at the same stations.
+"""
+from __future__ import annotations
+
+from typing import Optional
+
+import numpy as np
+
+from ..aero.bem import momentum_thrust
+from ..aero.polars import StationPolars
+from ..model import Turbine
+from ..numerics.newton import newton
+from ..numerics.rotations import atan2
+from .spinning_blade import SpinningBlade
+
+__all__ = ["AeroelasticBlade"]
+
+
+class AeroelasticBlade:
+    """Blade 0 of ``turbine`` (with its ``aerodynamics``) clamped on the hub spinning at
+    ``rotor_speed`` [rad/s] (default the turbine's) in a uniform axial wind ``wind_speed``
+    [m/s] of density ``rho``; ``elements`` per blade; ``tip_loss``, ``hub_loss``: Prandtl's.
+
+    Unknowns: ``[beam (12 + 18 N) | a (N G) | a' (N G)]``; the structural unknowns and rows
+    are SpinningBlade's, the induction rows the momentum balances above.
+    """
+
+    def __init__(self, turbine: Turbine, wind_speed: float, elements: Optional[int] = None,
+                 rotor_speed: Optional[float] = None, rho: float = 1.225,
+                 tip_loss: bool = True, hub_loss: bool = True):
+        aero = turbine.aerodynamics
+        if aero is None:
+            raise ValueError(f"turbine {turbine.name!r} has no aerodynamics section")
+        if not wind_speed > 0:
+            raise ValueError(f"wind_speed: {wind_speed!r} is not allowed; need a number > 0")
+        self.blade = SpinningBlade(turbine, elements, rotor_speed)
+        self.beam = self.blade.beam
+        self.omega = self.blade.rotor_speed
+        self.U = float(wind_speed)
+        self.rho = float(rho)
+        self.B = int(turbine.rotor.blades)
+        self.tip_loss, self.hub_loss = bool(tip_loss), bool(hub_loss)
+        L, e = turbine.blade.length, turbine.hub.radius
+        beta = turbine.rotor.precone
+        self.cos_cone = float(np.cos(beta))
+        xg = self.beam.xg                                   # (N, G) span coordinate [m]
+        s = xg / L
+        self.chord = np.interp(s, aero.stations, aero.chord)[:, :, None]       # (N, G, 1)
+        self.tau = np.interp(s, aero.stations, aero.twist)[:, :, None]
+        self.polars = StationPolars(aero, s.ravel())
+        self.r = ((e + xg) * self.cos_cone)[:, :, None]      # distance from the shaft [m]
+        self.hub_r = e * self.cos_cone
+        self.tip_r = (e + L) * self.cos_cone
+        # shaft axis and direction of motion in the root frame b (precone about b2)
+        self.axes = np.array([[np.sin(beta), 0.0, np.cos(beta)], [0.0, 1.0, 0.0]])
+        N, G = xg.shape
+        self.n_beam = self.beam.n
+        self.n_stations = N * G
+        self.n = self.n_beam + 2 * N * G
+        self.differential = np.concatenate([self.beam.differential,
+                                            np.zeros(2 * N * G, bool)])
+
+    # ------------------------------------------------------------------ residual
+    def _split(self, y):
+        B = y.shape[0]
+        N, G = self.beam.xg.shape
+        ind = y[:, self.n_beam:].reshape(B, 2, N, G).transpose(1, 2, 3, 0)    # (2, N, G, B)
+        return ind[0], ind[1]
+
+    def residual(self, yd, y, t=0.0, details: Optional[dict] = None):
+        """R (B, n) or (n,); ``details``: filled with the Gauss-point arrays (N, G, B) of the
+        aerodynamics (alpha, phi, a, ap, loads) when given."""
+        one = np.ndim(y) == 1
+        yd, y = np.atleast_2d(yd), np.atleast_2d(y)
+        B = y.shape[0]
+        a, ap = self._split(y)
+        rows = {}
+        U, Om = self.U, self.omega
+
+        def loads(sec):
+            s3, tt = sec["wind"][..., 0, :], sec["wind"][..., 1, :]          # (N, G, B, 3)
+            V = sec["V"]
+            air = U * (1.0 - a)[..., None] * s3 - (ap * Om * self.r)[..., None] * tt
+            W = air - V
+            W2, W3 = W[..., 1], W[..., 2]
+            q = 0.5 * self.rho * (W2 * W2 + W3 * W3)
+            w = np.sqrt(W2 * W2 + W3 * W3)
+            alpha = atan2(W3, -W2) + self.tau
+            cl, cd, cm = self.polars.coefficients(alpha.transpose(2, 0, 1).reshape(B, -1))
+            shape = alpha.shape
+            cl, cd, cm = (c.reshape(B, *shape[:2]).transpose(1, 2, 0) for c in (cl, cd, cm))
+            qc = q * self.chord
+            f2 = qc * (cl * W3 + cd * W2) / w
+            f3 = qc * (-cl * W2 + cd * W3) / w
+            force = np.zeros(W.shape, dtype=W.dtype)
+            force[..., 1], force[..., 2] = f2, f3
+            moment = np.zeros(W.shape, dtype=W.dtype)
+            moment[..., 0] = qc * self.chord * cm
+            # thrust (along s3) and driving force (along t) per unit blade length
+            thrust = force[..., 1] * s3[..., 1] + force[..., 2] * s3[..., 2] \
+                + force[..., 0] * s3[..., 0]
+            drive = force[..., 1] * tt[..., 1] + force[..., 2] * tt[..., 2] \
+                + force[..., 0] * tt[..., 0]
+            # the inflow angle in the rotor frame for Prandtl's factors
+            Wa = np.sum(W * s3, axis=-1)
+            Wt = -np.sum(W * tt, axis=-1)
+            # |sin phi| (the sign from the real part: complex-step safe)
+            sphi = Wa * np.sign(np.real(Wa)) / np.sqrt(Wa * Wa + Wt * Wt)
+            r = self.r
+            F = np.ones_like(sphi)
+            if self.tip_loss:
+                F = F * (2 / np.pi) * np.arccos(np.exp(-0.5 * self.B * (self.tip_r - r)
+                                                       / (r * sphi)))
+            if self.hub_loss:
+                F = F * (2 / np.pi) * np.arccos(np.exp(-0.5 * self.B * (r - self.hub_r)
+                                                       / (self.hub_r * sphi)))
+            ann = 2 * np.pi * r * 0.5 * self.rho * U * U                # momentum scale
+            rows["a"] = (self.B * thrust / self.cos_cone - momentum_thrust(a, F) * ann) / ann
+            rows["ap"] = (self.B * drive * r / self.cos_cone
+                          - 4 * ap * (1 - a) * F * self.rho * U * Om * np.pi * r ** 3) / ann / r
+            if details is not None:
+                details.update(alpha=alpha, a=a, ap=ap, F=F, thrust=thrust, drive=drive,
+                               w=w, cl=cl, cd=cd)
+            return force, moment
+
+        v = np.broadcast_to(self.blade.v, (B, 3))
+        wv = np.broadcast_to(self.blade.w, (B, 3))
+        axes = np.broadcast_to(self.axes, (B, 2, 3))
+        r_beam = self.beam.residual(yd[:, :self.n_beam], y[:, :self.n_beam], v, wv,
+                                    wind=axes, section_loads=loads)
+        extra = np.concatenate([rows["a"].transpose(2, 0, 1).reshape(B, -1),
+                                rows["ap"].transpose(2, 0, 1).reshape(B, -1)], axis=1)
+        out = np.concatenate([r_beam, extra], axis=1)
+        return out[0] if one else out
+
+    def jacobian(self, y):
+        """dR/dy (n, n) at ydot = 0, dense, exact by complex step (all columns at once)."""
+        n = self.n
+        h = 1e-30
+        Y = np.broadcast_to(y, (n, n)) + 1j * h * np.eye(n)
+        return self.residual(np.zeros((n, n)), Y).imag.T / h
+
+    def steady_state(self, a0=0.3, ap0=0.0):
+        """The aeroelastic steady state (n,): Newton from the rigid spinning blade with
+        uniform inductions (a0, ap0)."""
+        y0 = np.concatenate([self.blade.steady_state(),
+                             np.full(self.n_stations, a0), np.full(self.n_stations, ap0)])
+        z = np.zeros(self.n)
+        y, _ = newton(lambda y: self.residual(z, y), self.jacobian, y0,
+                      what="aeroelastic blade steady state")
+        return y
+

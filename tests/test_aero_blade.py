@@ -1,0 +1,120 @@
+"""One blade of the NREL 5-MW spinning in axial wind with blade-element momentum loads at its
+Gauss points (hawt_core/assembly/aero_blade.py): the aeroelastic steady state.
+
+References (each test states its tolerance):
+* the rigid-rotor BEM of aero/bem.py (Ning's one-residual solution, itself checked against
+  Glauert's optimum rotor and the NREL 5-MW's published Cp in tests/test_bem.py) at the same
+  radii: a stiff blade must reach its inductions, the error shrinking with the compliance;
+* energy: the shaft power through the blade root (root loads about the shaft axis times the
+  rotor speed) equals the aerodynamic power of the distributed driving forces (the inertial
+  loads of steady rotation have no moment about the shaft), to the discretization error;
+* complex-step Jacobian columns equal central differences.
+"""
+from __future__ import annotations
+
+import warnings
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from hawt_core.aero import BemRotor, StationPolars
+from hawt_core.assembly.aero_blade import AeroelasticBlade
+from hawt_core.io.catalog import load_any
+
+U, TSR = 8.0, 7.5
+
+
+def nrel5mw(stiffness=1.0, precone=0.0):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        t = load_any("nrel5mw")
+    sec = t.blade.sections
+    kw = {k: getattr(sec, k) * stiffness for k in ("gj", "ei2", "ei3", "ea", "ga2", "ga3")
+          if getattr(sec, k) is not None}
+    if sec.stiffness_6x6 is not None:
+        kw["stiffness_6x6"] = sec.stiffness_6x6 * stiffness
+    omega = TSR * U / (t.hub.radius + t.blade.length)
+    return replace(t, rotor=replace(t.rotor, precone=precone, speed=omega),
+                   blade=replace(t.blade, sections=replace(sec, **kw)))
+
+
+def rigid_bem(model, turbine):
+    aero = turbine.aerodynamics
+    s = model.beam.xg.ravel() / turbine.blade.length
+    r = model.r[..., 0].ravel()
+    rotor = BemRotor(turbine.rotor.blades, r, np.interp(s, aero.stations, aero.chord),
+                     -np.interp(s, aero.stations, aero.twist), StationPolars(aero, s),
+                     model.hub_r, model.tip_r)
+    return rotor.solve(U, model.omega)
+
+
+def test_stiff_blade_reaches_the_rigid_rotor_bem():
+    """A blade 1e4 and 1e6 times stiffer than the NREL 5-MW's: the inductions a, a' at every
+    Gauss point equal the rigid-rotor BEM's at those radii within 3e-5 and 3e-7 (the error is
+    the deflection's, proportional to the compliance: it falls 100-fold with it)."""
+    errors = []
+    for k in (1e4, 1e6):
+        t = nrel5mw(stiffness=k)
+        m = AeroelasticBlade(t, U, elements=8)
+        y = m.steady_state()
+        d = {}
+        m.residual(np.zeros(m.n), y, details=d)
+        ref = rigid_bem(m, t)
+        errors.append(max(np.max(np.abs(d["a"][..., 0].ravel() - ref.a)),
+                          np.max(np.abs(d["ap"][..., 0].ravel() - ref.ap))))
+    print(f"\nstiff blade vs rigid BEM: max |da|, |da'| {errors}")
+    assert errors[0] < 3e-5 and errors[1] < 3e-7
+    assert 50 < errors[0] / errors[1] < 200
+
+
+def shaft_power(m, y):
+    """(through the root, of the distributed loads) [W] for one blade."""
+    d = {}
+    m.residual(np.zeros(m.n), y, details=d)
+    F0, M0 = y[0:3], y[3:6]
+    e = m.hub_r / m.cos_cone
+    s3 = m.axes[0]
+    torque_root = np.dot(M0 + np.cross([e, 0.0, 0.0], F0), s3)
+    beam = m.beam
+    weights = beam.h[:, None] * beam.w[None, :]              # Gauss weights per element
+    aero = np.sum(d["drive"][..., 0] * m.r[..., 0] / m.cos_cone * weights) * 1.0
+    return torque_root * m.omega, aero * m.omega
+
+
+def test_shaft_power_equals_aerodynamic_power():
+    """The flexible NREL 5-MW blade (its own stiffness and precone): the power through the
+    root equals that of the aerodynamic driving forces on the deformed blade, to the
+    discretization error (1e-3 at N = 16, shrinking with the mesh)."""
+    gaps = []
+    for N in (8, 16):
+        t = nrel5mw(precone=-0.04363323129985824)
+        m = AeroelasticBlade(t, U, elements=N)
+        y = m.steady_state()
+        root, aero = shaft_power(m, y)
+        gaps.append(abs(root / aero - 1))
+        print(f"\nN = {N}: shaft power {root / 1e3:.2f} kW through the root, "
+              f"{aero / 1e3:.2f} kW of the driving forces")
+    assert gaps[-1] < 1e-3 and gaps[-1] < gaps[0]
+
+
+def test_complex_step_jacobian_equals_central_differences():
+    """40 columns of dR/dy at the flexible blade's steady state: complex step against central
+    differences (step 1e-5 of the unknown's scale), 1e-5 of the column's largest entry plus
+    the differences' own cancellation error (the residual's root rows are ~1e6 N)."""
+    t = nrel5mw()
+    m = AeroelasticBlade(t, U, elements=4)
+    y = m.steady_state()
+    J = m.jacobian(y)
+    scale = np.maximum(np.abs(y), 1.0)
+    z = np.zeros(m.n)
+    big = np.max(np.abs(m.residual(z, y + 0.0)) + np.abs(y))     # round-off scale of R
+    cols = np.linspace(0, m.n - 1, 40).astype(int)
+    for j in cols:
+        h = 1e-5 * scale[j]
+        e = np.zeros(m.n)
+        e[j] = h
+        cd = (m.residual(z, y + e) - m.residual(z, y - e)) / (2 * h)
+        # truncation (h^2) and cancellation (|R| eps / h) of the central difference
+        tol = 1e-5 * max(1.0, np.max(np.abs(J[:, j]))) + 1e3 * np.finfo(float).eps * big / h
+        assert np.max(np.abs(cd - J[:, j])) < tol, j
