@@ -5,7 +5,8 @@ Usage: PYTHONPATH=. .venv/bin/python bench/aeroelastic.py [--repeat K]
 
 Prints for each turbine: stations, the default 25 x 31 table's wall time (best of K), the
 time per operating point (all stations solved together by vectorized bisection), and the
-optimum found. One core (OPENBLAS_NUM_THREADS=1 does not matter here: no linear algebra).
+optimum found; then the NREL 5-MW's 23 aeroelastic operating points 3-25 m/s (16 elements,
+ROSCO's schedule; the issue's goal: < 20 s) and Goland's wing flutter sweep (19 speeds). One core (OPENBLAS_NUM_THREADS=1 does not matter here: no linear algebra).
 The aeroelastic figures of the issue (operating points, aeroelastic Floquet, simulation with
 aerodynamics) are added here as those analyses land.
 """
@@ -38,6 +39,34 @@ def main():
         print(f"{name:10s} {table.settings['stations']:8d} {best:8.3f} "
               f"{1e6 * best / table.cp.size:9.1f}  Cp {opt['cp']:.4f} at TSR {opt['tsr']:.3g}, "
               f"pitch {opt['pitch_deg']:.3g} deg")
+
+
+    from hawt_core.analyses.operating_points import operating_points
+    from hawt_core.io.discon import discon_schedule
+    import importlib.util
+    from pathlib import Path
+    spec = importlib.util.find_spec("rosco")
+    if spec is not None:
+        deck = Path(spec.origin).resolve().parents[1] / "Examples" / "Test_Cases"
+        schedule = discon_schedule(deck / "NREL-5MW" / "DISCON.IN")
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            turbine = load_any("nrel5mw")
+        t0 = time.perf_counter()
+        r = operating_points(turbine, np.linspace(3, 25, 23), schedule)
+        dt = time.perf_counter() - t0
+        ok = sum(p["converged"] for p in r.points)
+        print(f"nrel5mw operating points 3-25 m/s (23, 16 elements): {dt:.1f} s, "
+              f"{ok}/23 converged (goal < 20 s)")
+    from hawt_core.analyses.flutter import flutter
+    from hawt_core.io.wing_yaml import load_wing
+    wing = load_wing(Path(__file__).resolve().parents[1] / "hawt_core" / "data"
+                     / "goland_wing.yaml")
+    t0 = time.perf_counter()
+    f = flutter(wing, np.linspace(20, 200, 19))
+    print(f"goland flutter sweep (19 speeds, {f.settings['elements']} elements): "
+          f"{time.perf_counter() - t0:.1f} s; flutter {f.flutter_speed:.2f} m/s, "
+          f"{f.flutter_frequency:.2f} rad/s")
 
 
 if __name__ == "__main__":

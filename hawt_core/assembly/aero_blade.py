@@ -2,8 +2,9 @@
 its Gauss points: the first aeroelastic model of a rotor blade (the SpinningBlade of the
 blade-modes analysis with aerodynamics), for its steady state.
 
-At each Gauss point of the beam, in the deformed section frame B (which carries the pitch, the
-elastic twist and the bending slopes), the air velocity relative to the section is
+At each Gauss point of the beam, in the deformed section frame B (the element's section frame,
+which carries the pitch, turned by the elastic rotation: twist and bending slopes), the air
+velocity relative to the section is
 
     W = U (1 - a) s3 - a' Omega r t - V
 
@@ -73,6 +74,10 @@ class AeroelasticBlade:
         self.chord = np.interp(s, aero.stations, aero.chord)[:, :, None]       # (N, G, 1)
         self.tau = np.interp(s, aero.stations, aero.twist)[:, :, None]
         self.polars = StationPolars(aero, s.ravel())
+        # element section frames (pitch; a curved line's turn) in b: the unknowns are in
+        # components of b turned by the elastic rotation, the airfoil lives in these frames
+        self.frames = np.ascontiguousarray(
+            self.beam.props.element_frames()[:, None, None, :, :])       # (N, 1, 1, 3, 3)
         self.r = ((e + xg) * self.cos_cone)[:, :, None]      # distance from the shaft [m]
         self.hub_r = e * self.cos_cone
         self.tip_r = (e + L) * self.cos_cone
@@ -102,9 +107,18 @@ class AeroelasticBlade:
         rows = {}
         U, Om = self.U, self.omega
 
+        A = self.frames
+
+        def to_section(x):      # turned-b components -> the section frame's (pitch, bend)
+            return np.einsum("ngbji,ngbj->ngbi", A, x)
+
+        def from_section(x):
+            return np.einsum("ngbij,ngbj->ngbi", A, x)
+
         def loads(sec):
-            s3, tt = sec["wind"][..., 0, :], sec["wind"][..., 1, :]          # (N, G, B, 3)
-            V = sec["V"]
+            s3 = to_section(sec["wind"][..., 0, :])                           # (N, G, B, 3)
+            tt = to_section(sec["wind"][..., 1, :])
+            V = to_section(sec["V"])
             air = U * (1.0 - a)[..., None] * s3 - (ap * Om * self.r)[..., None] * tt
             W = air - V
             W2, W3 = W[..., 1], W[..., 2]
@@ -146,7 +160,7 @@ class AeroelasticBlade:
             if details is not None:
                 details.update(alpha=alpha, a=a, ap=ap, F=F, thrust=thrust, drive=drive,
                                w=w, cl=cl, cd=cd)
-            return force, moment
+            return from_section(force), from_section(moment)
 
         v = np.broadcast_to(self.blade.v, (B, 3))
         wv = np.broadcast_to(self.blade.w, (B, 3))
@@ -158,6 +172,20 @@ class AeroelasticBlade:
         out = np.concatenate([r_beam, extra], axis=1)
         return out[0] if one else out
 
+    def root_loads(self, y):
+        """(shaft torque [N m], thrust [N]) of this blade through its root: the root force
+        and moment about the shaft axis (the inertial loads of steady rotation have no
+        moment about it and no component along it)."""
+        F0, M0 = y[0:3], y[3:6]
+        e = self.hub_r / self.cos_cone
+        s3 = self.axes[0]
+        return float(np.dot(M0 + np.cross([e, 0.0, 0.0], F0), s3)), float(np.dot(F0, s3))
+
+    def tip_deflection(self, y):
+        """(flap along b3, edge along b2) [m] of the tip in the root frame."""
+        o = self.n_beam - 18 + 6
+        return float(y[o + 2]), float(y[o + 1])
+
     def jacobian(self, y):
         """dR/dy (n, n) at ydot = 0, dense, exact by complex step (all columns at once)."""
         n = self.n
@@ -165,13 +193,15 @@ class AeroelasticBlade:
         Y = np.broadcast_to(y, (n, n)) + 1j * h * np.eye(n)
         return self.residual(np.zeros((n, n)), Y).imag.T / h
 
-    def steady_state(self, a0=0.3, ap0=0.0):
-        """The aeroelastic steady state (n,): Newton from the rigid spinning blade with
-        uniform inductions (a0, ap0)."""
-        y0 = np.concatenate([self.blade.steady_state(),
-                             np.full(self.n_stations, a0), np.full(self.n_stations, ap0)])
+    def steady_state(self, a0=0.3, ap0=0.0, y0=None):
+        """The aeroelastic steady state (n,): Newton from ``y0`` (e.g. a neighbouring
+        operating point's state), else from the rigid spinning blade with uniform inductions
+        (a0, ap0)."""
+        if y0 is None:
+            y0 = np.concatenate([self.blade.steady_state(), np.full(self.n_stations, a0),
+                                 np.full(self.n_stations, ap0)])
         z = np.zeros(self.n)
         y, _ = newton(lambda y: self.residual(z, y), self.jacobian, y0,
-                      what="aeroelastic blade steady state")
+                      what="aeroelastic blade steady state", reuse_jacobian=True)
         return y
 

@@ -159,3 +159,107 @@ def _flutter_args(p):
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
     p.add_argument("--plot", metavar="FILE.png", default=None,
                    help="write frequency and damping against speed to this PNG file")
+
+
+#: The rosco wheel's controller file of each shipped turbine (under its Examples/Test_Cases).
+SHIPPED_CONTROLLERS = {
+    "nrel5mw": "NREL-5MW/DISCON.IN",
+    "iea15mw": "IEA-15-240-RWT/IEA-15-240-RWT-Monopile/IEA-15-240-RWT-Monopile_DISCON.IN",
+}
+
+
+def rosco_examples():
+    """The rosco wheel's Examples/Test_Cases folder, or None."""
+    import importlib.util
+    from pathlib import Path
+    spec = importlib.util.find_spec("rosco")
+    if spec is None or spec.origin is None:
+        return None
+    root = Path(spec.origin).resolve().parents[1] / "Examples" / "Test_Cases"
+    return root if root.is_dir() else None
+
+
+def schedule_from_args(args) -> dict:
+    """The operating-point schedule: --controller FILE, the shipped turbine's DISCON.IN from
+    the rosco wheel, or the values given; each given value overrides the file's."""
+    import math
+    from ..io.discon import discon_schedule
+    path = args.controller
+    if path is None and args.turbine in SHIPPED_CONTROLLERS:
+        root = rosco_examples()
+        if root is not None:
+            path = root / SHIPPED_CONTROLLERS[args.turbine]
+    s = discon_schedule(path) if path is not None else {}
+    given = {"rated_power": None if args.rated_power is None else 1e3 * args.rated_power,
+             "rated_speed": None if args.rated_rpm is None else args.rated_rpm * math.pi / 30,
+             "min_speed": None if args.min_rpm is None else args.min_rpm * math.pi / 30,
+             "tsr": args.tsr_opt,
+             "efficiency": None if args.efficiency is None else args.efficiency / 100,
+             "fine_pitch": None if args.fine_pitch is None else math.radians(args.fine_pitch)}
+    s.update({k: v for k, v in given.items() if v is not None})
+    s.setdefault("min_speed", 0.0)
+    s.setdefault("efficiency", 1.0)
+    s.setdefault("fine_pitch", 0.0)
+    s.setdefault("max_pitch", math.radians(90.0))
+    missing = [k for k in ("rated_power", "rated_speed", "tsr") if k not in s]
+    if missing:
+        flags = {"rated_power": "--rated-power", "rated_speed": "--rated-rpm",
+                 "tsr": "--tsr-opt"}
+        raise ValueError("operating-points: no controller file for this turbine; give "
+                         "--controller DISCON.IN or " + ", ".join(flags[k] for k in missing))
+    return s
+
+
+@command("operating-points", help="aeroelastic steady states against wind speed",
+         description="The rotor's aeroelastic steady state at each wind speed (blades on the "
+                     "spinning hub with BEM loads at the beams' Gauss points, axial wind) "
+                     "under a region-2 optimal-TSR / region-3 constant-power pitch schedule "
+                     "read from ROSCO's DISCON.IN (for the shipped nrel5mw and iea15mw, the "
+                     "rosco wheel's) or given: rotor speed, pitch, power, thrust, Cp, Ct, tip "
+                     "deflections.")
+def cmd_operating_points(args) -> int:
+    from ..analyses.operating_points import operating_points
+    from .status import ProgressLine
+    turbine = load(args.turbine)
+    schedule = schedule_from_args(args)
+    status = ProgressLine(not args.json)
+    try:
+        result = operating_points(turbine, args.wind, schedule, elements=args.elements,
+                                  progress=status)
+    finally:
+        status.close()
+    if args.plot:
+        result.plot(args.plot)
+    if args.json:
+        print(result.to_json())
+    else:
+        print(result.table())
+        if args.plot:
+            print(f"picture written to {args.plot}")
+    return 0
+
+
+@cmd_operating_points.arguments
+def _operating_points_args(p):
+    from .parser import elements_type
+    turbine_arg(p)
+    p.add_argument("--wind", type=grid_type("--wind", 0.1, 100.0, "m/s"), default="3:25:23",
+                   metavar="START:STOP:COUNT", help="wind speeds [m/s] (default 3:25:23)")
+    p.add_argument("--controller", default=None, metavar="DISCON.IN",
+                   help="ROSCO controller file with the schedule (default for nrel5mw and "
+                        "iea15mw: the rosco wheel's)")
+    for flag, unit, what in (("--rated-power", "kW", "rated generator power"),
+                             ("--rated-rpm", "rpm", "rated rotor speed"),
+                             ("--min-rpm", "rpm", "minimum rotor speed"),
+                             ("--tsr-opt", "-", "region-2 tip-speed ratio"),
+                             ("--efficiency", "%", "generator efficiency"),
+                             ("--fine-pitch", "deg", "below-rated pitch")):
+        p.add_argument(flag, type=finite_float(flag, unit=unit), default=None,
+                       metavar=unit.upper() if unit != "-" else "X",
+                       help=f"{what} [{unit}] (overrides the controller file's)")
+    p.add_argument("--elements", "-n", type=elements_type, default=None, metavar="N",
+                   help="elements per blade (default 16)")
+    p.add_argument("--json", action="store_true",
+                   help='print {"points": [{"wind_speed", "rotor_speed_rpm", "pitch_deg", ...}]}')
+    p.add_argument("--plot", metavar="FILE.png", default=None,
+                   help="write the operating-point curves to this PNG file")
