@@ -197,11 +197,16 @@ class AeroelasticBlade:
         """The aeroelastic steady state (n,): Newton from ``y0`` (e.g. a neighbouring
         operating point's state), else from the rigid spinning blade with uniform inductions
         (a0, ap0)."""
-        if y0 is None:
-            y0 = np.concatenate([self.blade.steady_state(), np.full(self.n_stations, a0),
-                                 np.full(self.n_stations, ap0)])
         z = np.zeros(self.n)
-        y, _ = newton(lambda y: self.residual(z, y), self.jacobian, y0,
+        inductions = [np.full(self.n_stations, a0), np.full(self.n_stations, ap0)]
+        # the tolerance's scale: the residual of the rigid, unloaded blade (a warm start's
+        # small first residual would ask for less than the round-off of the root rows)
+        cold = np.concatenate([self.beam.rigid_body_state(self.blade.v, self.blade.w),
+                               *inductions])
+        scale = np.max(np.abs(self.residual(z, cold)))
+        if y0 is None:
+            y0 = np.concatenate([self.blade.steady_state(), *inductions])
+        y, _ = newton(lambda y: self.residual(z, y), self.jacobian, y0, scale=scale,
                       what="aeroelastic blade steady state", reuse_jacobian=True)
         return y
 

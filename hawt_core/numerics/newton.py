@@ -18,8 +18,10 @@ CHORD_CONTRACTION = 0.05
 
 
 def newton(fun, jac, y0, tol=1e-9, max_iter=30, what="steady state", fixed=None,
-           linear_solve=None, reuse_jacobian: bool = False):
-    """Newton's method with a sparse LU; ``tol`` is relative to the first residual's scale.
+           linear_solve=None, reuse_jacobian: bool = False, scale=None):
+    """Newton's method with a sparse LU; ``tol`` is relative to the first residual's scale
+    (or to ``scale`` when given: a warm start's small first residual would otherwise ask for
+    a tolerance below the residual's round-off).
 
     ``reuse_jacobian``: keep the Jacobian (and its factors) while each step shrinks the
     largest residual by at least CHORD_CONTRACTION (the chord method; a weakly nonlinear
@@ -39,7 +41,7 @@ def newton(fun, jac, y0, tol=1e-9, max_iter=30, what="steady state", fixed=None,
     """
     y = np.array(y0, dtype=float)
     r = fun(y)
-    scale = max(1.0, np.max(np.abs(r)))
+    scale = max(1.0, np.max(np.abs(r))) if scale is None else max(1.0, float(scale))
     fixed = np.asarray([] if fixed is None else fixed, int)
     n, k = len(y), len(fixed)
     P = sp.csc_matrix((np.ones(k), (fixed, np.arange(k))), shape=(n, k))
