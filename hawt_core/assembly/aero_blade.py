@@ -31,10 +31,12 @@ from __future__ import annotations
 from typing import Optional
 
 import numpy as np
+import scipy.sparse as sp
 
 from ..aero.bem import momentum_thrust
 from ..aero.polars import StationPolars
 from ..model import Turbine
+from ..numerics.jacobian import ColouredJacobian, block_tridiagonal_pattern
 from ..numerics.newton import newton
 from ..numerics.rotations import atan2
 from .spinning_blade import SpinningBlade
@@ -89,6 +91,25 @@ class AeroelasticBlade:
         self.n = self.n_beam + 2 * N * G
         self.differential = np.concatenate([self.beam.differential,
                                             np.zeros(2 * N * G, bool)])
+        self._jac = ColouredJacobian(self._pattern())
+
+    def _pattern(self):
+        """Sparsity of dR/dy: the beam's block-tridiagonal blocks; the inductions of element
+        e reach the rows of its two nodes' blocks (e, e + 1: block 0 is the root's) and their
+        own two rows; those rows read the two nodes' blocks."""
+        N, G = self.beam.xg.shape
+        sizes = self.beam.pattern_blocks()
+        starts = np.concatenate([[0], np.cumsum(sizes)])
+        P = sp.lil_matrix((self.n, self.n), dtype=bool)
+        P[:self.n_beam, :self.n_beam] = block_tridiagonal_pattern(sizes)
+        for e in range(N):
+            nodes = np.arange(starts[e], starts[e + 2])
+            for g in range(G):
+                ind = self.n_beam + np.array([0, N * G]) + e * G + g
+                P[np.ix_(nodes, ind)] = True
+                P[np.ix_(ind, nodes)] = True
+                P[np.ix_(ind, ind)] = True
+        return P.tocsc()
 
     # ------------------------------------------------------------------ residual
     def _split(self, y):
@@ -187,7 +208,14 @@ class AeroelasticBlade:
         return float(y[o + 2]), float(y[o + 1])
 
     def jacobian(self, y):
-        """dR/dy (n, n) at ydot = 0, dense, exact by complex step (all columns at once)."""
+        """dR/dy (n, n) at ydot = 0, sparse, exact by complex step (coloured columns, one
+        batched residual evaluation)."""
+        C = self._jac.n_colours
+        return self._jac.batched(lambda Y: self.residual(np.zeros((C, self.n)), Y), y)
+
+    def dense_jacobian(self, y):
+        """dR/dy (n, n) dense by complex step, every column (the reference of the coloured
+        one)."""
         n = self.n
         h = 1e-30
         Y = np.broadcast_to(y, (n, n)) + 1j * h * np.eye(n)
