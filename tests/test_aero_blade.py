@@ -16,6 +16,7 @@ import warnings
 from dataclasses import replace
 
 import numpy as np
+import pytest
 
 from hawt_core.aero import BemRotor, StationPolars
 from hawt_core.assembly.aero_blade import AeroelasticBlade
@@ -137,3 +138,33 @@ def test_complex_step_jacobian_equals_central_differences():
         # truncation (h^2) and cancellation (|R| eps / h) of the central difference
         tol = 1e-5 * max(1.0, np.max(np.abs(J[:, j]))) + 1e3 * np.finfo(float).eps * big / h
         assert np.max(np.abs(cd - J[:, j])) < tol, j
+
+
+def test_oye_dynamic_inflow_keeps_the_steady_state():
+    """With Oye's dynamic inflow (four differential unknowns per Gauss point) the steady state
+    is the quasi-steady one (the filters pass a constant: 1e-8 in the inductions, 1e-9 of the
+    beam unknowns), z = (1 - k) a, and tau1 = 1.1 R / ((1 - 1.3 a_mean) U) from the state's
+    area-weighted mean induction; the rate coefficients of the filter rows are tau2 and tau1
+    (dR/dydot, complex step)."""
+    from hawt_core.aero.inflow import OYE_K
+    t = nrel5mw(precone=-0.04363323129985824)
+    q = AeroelasticBlade(t, U, elements=8)
+    o = AeroelasticBlade(t, U, elements=8, inflow="oye")
+    yq, yo = q.steady_state(), o.steady_state()
+    nb, ns = q.n_beam, q.n_stations
+    assert np.max(np.abs(yq[:nb] - yo[:nb])) < 1e-9 * np.max(np.abs(yq[:nb]))
+    assert np.max(np.abs(yq[nb:] - yo[nb:nb + 2 * ns])) < 1e-8
+    assert np.allclose(yo[nb + 2 * ns:], (1 - OYE_K) * yo[nb:nb + 2 * ns], atol=1e-14)
+    a = yo[nb:nb + ns].reshape(o.beam.xg.shape)
+    w = o.r[..., 0] * o.beam.h[:, None] * o.beam.w[None, :]
+    a_mean = np.sum(a * w) / np.sum(w)
+    assert o.tau1 == pytest.approx(1.1 * o.rotor_radius / ((1 - 1.3 * a_mean) * U), rel=1e-12)
+    h = 1e-30
+    rows = nb + np.arange(4 * ns)
+    E = np.array([o.residual(1j * h * np.eye(o.n)[j], yo).imag / h for j in rows]).T
+    diag = E[rows, np.arange(4 * ns)]
+    tau2 = np.broadcast_to(o.tau2[..., 0], o.beam.xg.shape).ravel()
+    assert np.allclose(diag[:ns], tau2, rtol=1e-12) and np.allclose(diag[ns:2 * ns], tau2)
+    assert np.allclose(diag[2 * ns:], o.tau1, rtol=1e-12)
+    with pytest.raises(ValueError, match="inflow"):
+        AeroelasticBlade(t, U, inflow="pitt-peters")

@@ -23,6 +23,7 @@ import numpy as np
 import pytest
 
 from hawt_core.aero import BemRotor, HermiteTable, StationPolars, axial_induction
+from hawt_core.aero.bem import induction_from_thrust
 from hawt_core.analyses.aero_table import aero_table
 from hawt_core.io.catalog import load_any
 from hawt_core.model import Aerodynamics, Polar
@@ -130,6 +131,10 @@ def test_axial_induction_satisfies_momentum_with_buhl():
         assert np.allclose(a[low], k[low] / (1 + k[low]), rtol=1e-15)
         a_switch = axial_induction(np.array([2 / 3 - 1e-9, 2 / 3 + 1e-9]), F)
         assert abs(a_switch[1] - a_switch[0]) < 1e-6 and abs(a_switch[0] - 0.4) < 1e-8
+        # the inverse: the induction of a local thrust coefficient, both branches
+        ct = np.linspace(0.01, 0.96 * F + 0.8, 60)
+        assert np.allclose(buhl_thrust(induction_from_thrust(ct, F), F), ct, rtol=1e-12,
+                           atol=1e-14)
 
 
 # ------------------------------------------------------------------------------ ideal rotor

@@ -29,7 +29,8 @@ import numpy as np
 
 from .polars import StationPolars
 
-__all__ = ["BemRotor", "BemSolution", "axial_induction", "momentum_thrust"]
+__all__ = ["BemRotor", "BemSolution", "axial_induction", "momentum_thrust",
+           "induction_from_thrust"]
 
 #: Axial induction above which Buhl's correction replaces momentum theory (k = 2/3).
 BUHL_INDUCTION = 0.4
@@ -43,6 +44,23 @@ def momentum_thrust(a, F=1.0):
     F = np.asarray(F)
     buhl = 8.0 / 9.0 + (4.0 * F - 40.0 / 9.0) * a + (50.0 / 9.0 - 4.0 * F) * a * a
     return np.where(np.real(a) <= BUHL_INDUCTION, 4.0 * a * F * (1.0 - a), buhl)
+
+
+def induction_from_thrust(ct, F=1.0):
+    """The axial induction a whose momentum_thrust(a, F) is the local thrust coefficient
+    ``ct``: a = (1 - sqrt(1 - ct/F)) / 2 up to ct = 0.96 F (a = 0.4), the root of Buhl's
+    parabola beyond (complex-step safe)."""
+    ct = np.asarray(ct)
+    F = np.asarray(F)
+    switch = 0.96 * F
+    low = 0.5 * (1.0 - np.sqrt(1.0 - np.where(np.real(ct) <= np.real(switch), ct, 0.0) / F))
+    qa = 50.0 / 9.0 - 4.0 * F
+    qb = 4.0 * F - 40.0 / 9.0
+    qc = 8.0 / 9.0 - ct
+    disc = qb * qb - 4.0 * qa * qc
+    disc = np.where(np.real(disc) > 0, disc, 0.0)
+    high = (-qb + np.sqrt(disc)) / (2.0 * qa)
+    return np.where(np.real(ct) <= np.real(switch), low, high)
 
 
 def axial_induction(k, F, phi_positive=True):

@@ -33,7 +33,8 @@ from typing import Optional
 import numpy as np
 import scipy.sparse as sp
 
-from ..aero.bem import momentum_thrust
+from ..aero.bem import induction_from_thrust, momentum_thrust
+from ..aero.inflow import OYE_K, oye_time_constants
 from ..aero.polars import StationPolars
 from ..model import Turbine
 from ..numerics.jacobian import ColouredJacobian, block_tridiagonal_pattern
@@ -53,14 +54,20 @@ class AeroelasticBlade:
     are SpinningBlade's, the induction rows the momentum balances above.
     """
 
+    INFLOW = ("quasi-steady", "oye")
+
     def __init__(self, turbine: Turbine, wind_speed: float, elements: Optional[int] = None,
                  rotor_speed: Optional[float] = None, rho: float = 1.225,
-                 tip_loss: bool = True, hub_loss: bool = True):
+                 tip_loss: bool = True, hub_loss: bool = True, inflow: str = "quasi-steady"):
         aero = turbine.aerodynamics
         if aero is None:
             raise ValueError(f"turbine {turbine.name!r} has no aerodynamics section")
         if not wind_speed > 0:
             raise ValueError(f"wind_speed: {wind_speed!r} is not allowed; need a number > 0")
+        if inflow not in self.INFLOW:
+            raise ValueError(f"inflow: {inflow!r} is not allowed; choose one of "
+                             f"{', '.join(self.INFLOW)}")
+        self.inflow = inflow
         self.blade = SpinningBlade(turbine, elements, rotor_speed)
         self.beam = self.blade.beam
         self.omega = self.blade.rotor_speed
@@ -88,9 +95,14 @@ class AeroelasticBlade:
         N, G = xg.shape
         self.n_beam = self.beam.n
         self.n_stations = N * G
-        self.n = self.n_beam + 2 * N * G
+        #: induction unknowns per Gauss point: (a, a') algebraic, or with Oye's dynamic
+        #: inflow (a, a', z_a, z_t) differential (the filters' outputs and first stages)
+        self.n_ind = 2 if inflow == "quasi-steady" else 4
+        self.n = self.n_beam + self.n_ind * N * G
         self.differential = np.concatenate([self.beam.differential,
-                                            np.zeros(2 * N * G, bool)])
+                                            np.full(self.n_ind * N * G, inflow == "oye")])
+        self.rotor_radius = self.tip_r / self.cos_cone
+        self.set_inflow_time_constant(0.3)
         self._jac = ColouredJacobian(self._pattern())
 
     def _pattern(self):
@@ -105,18 +117,25 @@ class AeroelasticBlade:
         for e in range(N):
             nodes = np.arange(starts[e], starts[e + 2])
             for g in range(G):
-                ind = self.n_beam + np.array([0, N * G]) + e * G + g
+                ind = self.n_beam + N * G * np.arange(self.n_ind) + e * G + g
                 P[np.ix_(nodes, ind)] = True
                 P[np.ix_(ind, nodes)] = True
                 P[np.ix_(ind, ind)] = True
         return P.tocsc()
 
     # ------------------------------------------------------------------ residual
+    def set_inflow_time_constant(self, mean_induction: float) -> None:
+        """Oye's tau1 (held constant, as AeroDyn's DBEMT_Mod 1) from the rotor's mean axial
+        induction, and tau2 per Gauss point [s]."""
+        tau1, tau2 = oye_time_constants(self.rotor_radius, self.U, mean_induction,
+                                        self.r / self.cos_cone)
+        self.tau1, self.tau2 = float(tau1), tau2
+
     def _split(self, y):
         B = y.shape[0]
         N, G = self.beam.xg.shape
-        ind = y[:, self.n_beam:].reshape(B, 2, N, G).transpose(1, 2, 3, 0)    # (2, N, G, B)
-        return ind[0], ind[1]
+        ind = y[:, self.n_beam:].reshape(B, self.n_ind, N, G).transpose(1, 2, 3, 0)
+        return ind                                                   # (n_ind, N, G, B)
 
     def residual(self, yd, y, t=0.0, details: Optional[dict] = None):
         """R (B, n) or (n,); ``details``: filled with the Gauss-point arrays (N, G, B) of the
@@ -124,7 +143,8 @@ class AeroelasticBlade:
         one = np.ndim(y) == 1
         yd, y = np.atleast_2d(yd), np.atleast_2d(y)
         B = y.shape[0]
-        a, ap = self._split(y)
+        ind = self._split(y)
+        a, ap = ind[0], ind[1]
         rows = {}
         U, Om = self.U, self.omega
 
@@ -175,9 +195,17 @@ class AeroelasticBlade:
                 F = F * (2 / np.pi) * np.arccos(np.exp(-0.5 * self.B * (r - self.hub_r)
                                                        / (self.hub_r * sphi)))
             ann = 2 * np.pi * r * 0.5 * self.rho * U * U                # momentum scale
-            rows["a"] = (self.B * thrust / self.cos_cone - momentum_thrust(a, F) * ann) / ann
-            rows["ap"] = (self.B * drive * r / self.cos_cone
-                          - 4 * ap * (1 - a) * F * self.rho * U * Om * np.pi * r ** 3) / ann / r
+            if self.inflow == "quasi-steady":
+                rows["a"] = (self.B * thrust / self.cos_cone - momentum_thrust(a, F) * ann) / ann
+                rows["ap"] = (self.B * drive * r / self.cos_cone
+                              - 4 * ap * (1 - a) * F * self.rho * U * Om * np.pi * r ** 3
+                              ) / ann / r
+            else:
+                # the quasi-steady inductions of the blade's loads, filtered (Oye)
+                a_qs = induction_from_thrust(self.B * thrust / self.cos_cone / ann, F)
+                ap_qs = self.B * drive / self.cos_cone / (
+                    4 * (1 - a) * F * self.rho * U * Om * np.pi * r * r)
+                rows["qs"] = (a_qs, ap_qs)
             if details is not None:
                 details.update(alpha=alpha, a=a, ap=ap, F=F, thrust=thrust, drive=drive,
                                w=w, cl=cl, cd=cd)
@@ -188,8 +216,18 @@ class AeroelasticBlade:
         axes = np.broadcast_to(self.axes, (B, 2, 3))
         r_beam = self.beam.residual(yd[:, :self.n_beam], y[:, :self.n_beam], v, wv,
                                     wind=axes, section_loads=loads)
-        extra = np.concatenate([rows["a"].transpose(2, 0, 1).reshape(B, -1),
-                                rows["ap"].transpose(2, 0, 1).reshape(B, -1)], axis=1)
+        flat = lambda x: x.transpose(2, 0, 1).reshape(B, -1)
+        if self.inflow == "quasi-steady":
+            extra = np.concatenate([flat(rows["a"]), flat(rows["ap"])], axis=1)
+        else:
+            rates = self._split(yd)
+            k, t1, t2 = OYE_K, self.tau1, self.tau2
+            out_rows = []
+            for j, q in enumerate(rows["qs"]):        # the filters of a and of a'
+                out_rows.append((j, t2 * rates[j] + ind[j] - ind[2 + j] - k * q))
+                out_rows.append((2 + j, t1 * rates[2 + j] + ind[2 + j] - (1 - k) * q))
+            extra = np.concatenate([flat(r) for _, r in sorted(out_rows, key=lambda x: x[0])],
+                                   axis=1)
         out = np.concatenate([r_beam, extra], axis=1)
         return out[0] if one else out
 
@@ -227,14 +265,24 @@ class AeroelasticBlade:
         (a0, ap0)."""
         z = np.zeros(self.n)
         inductions = [np.full(self.n_stations, a0), np.full(self.n_stations, ap0)]
+        if self.inflow == "oye":
+            inductions += [(1 - OYE_K) * inductions[0], (1 - OYE_K) * inductions[1]]
         # the tolerance's scale: the residual of the rigid, unloaded blade (a warm start's
         # small first residual would ask for less than the round-off of the root rows)
         cold = np.concatenate([self.beam.rigid_body_state(self.blade.v, self.blade.w),
                                *inductions])
-        scale = np.max(np.abs(self.residual(z, cold)))
+        r_cold = np.abs(self.residual(z, cold))
+        # per row: the beam's rows in newtons (their rigid-blade imbalance), the induction
+        # rows dimensionless (1: inductions to the tolerance itself)
+        scale = np.ones(self.n)
+        scale[:self.n_beam] = max(1.0, np.max(r_cold[:self.n_beam]))
         if y0 is None:
             y0 = np.concatenate([self.blade.steady_state(), *inductions])
         y, _ = newton(lambda y: self.residual(z, y), self.jacobian, y0, scale=scale,
                       what="aeroelastic blade steady state", reuse_jacobian=True)
+        if self.inflow == "oye":        # tau1 from this state's mean induction (area-weighted)
+            a = y[self.n_beam:self.n_beam + self.n_stations].reshape(self.beam.xg.shape)
+            w = self.r[..., 0] * self.beam.h[:, None] * self.beam.w[None, :]
+            self.set_inflow_time_constant(float(np.sum(a * w) / np.sum(w)))
         return y
 

@@ -21,7 +21,8 @@ def newton(fun, jac, y0, tol=1e-9, max_iter=30, what="steady state", fixed=None,
            linear_solve=None, reuse_jacobian: bool = False, scale=None):
     """Newton's method with a sparse LU; ``tol`` is relative to the first residual's scale
     (or to ``scale`` when given: a warm start's small first residual would otherwise ask for
-    a tolerance below the residual's round-off).
+    a tolerance below the residual's round-off; an array gives each row its own scale, for
+    rows of different units, and the solve converges on the rows divided by it).
 
     ``reuse_jacobian``: keep the Jacobian (and its factors) while each step shrinks the
     largest residual by at least CHORD_CONTRACTION (the chord method; a weakly nonlinear
@@ -41,7 +42,18 @@ def newton(fun, jac, y0, tol=1e-9, max_iter=30, what="steady state", fixed=None,
     """
     y = np.array(y0, dtype=float)
     r = fun(y)
-    scale = max(1.0, np.max(np.abs(r))) if scale is None else max(1.0, float(scale))
+    if scale is None:
+        scale = max(1.0, np.max(np.abs(r)))
+    elif np.ndim(scale):                  # one scale per row: rows of different units
+        r_unit = np.maximum(np.asarray(scale, float), 1e-300)
+        base_fun = fun
+        fun = lambda y: base_fun(y) / r_unit      # noqa: E731 - converge on scaled rows
+        base_jac = jac
+        jac = lambda y: sp.diags(1.0 / r_unit) @ sp.csc_matrix(base_jac(y))  # noqa: E731
+        r = r / r_unit
+        scale = 1.0
+    else:
+        scale = max(1.0, float(scale))
     fixed = np.asarray([] if fixed is None else fixed, int)
     n, k = len(y), len(fixed)
     P = sp.csc_matrix((np.ones(k), (fixed, np.arange(k))), shape=(n, k))
