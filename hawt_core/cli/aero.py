@@ -94,6 +94,26 @@ def _aero_table_args(p):
                    help="write Cp and Ct contours to this PNG file")
 
 
+def report(args, run) -> int:
+    """Run ``run(progress)`` with a status line (none with --json), write --plot, print the
+    result's JSON (--json) or table."""
+    from .status import ProgressLine
+    status = ProgressLine(not args.json)
+    try:
+        result = run(status)
+    finally:
+        status.close()
+    if args.plot:
+        result.plot(args.plot)
+    if args.json:
+        print(result.to_json())
+        return 0
+    print(result.table())
+    if args.plot:
+        print(f"picture written to {args.plot}")
+    return 0
+
+
 #: Wing cases shipped with hawt: name -> file in hawt_core/data.
 SHIPPED_WINGS = {"goland": "goland_wing.yaml"}
 
@@ -123,23 +143,10 @@ def load_wing_case(spec: str):
                      "file or a shipped case (goland).")
 def cmd_flutter(args) -> int:
     from ..analyses.flutter import flutter
-    from .status import ProgressLine
     wing = load_wing_case(args.case)
-    status = ProgressLine(not args.json)
-    try:
-        result = flutter(wing, args.speeds, elements=args.elements, modes=args.modes,
-                         unsteady=not args.quasi_steady, progress=status)
-    finally:
-        status.close()
-    if args.plot:
-        result.plot(args.plot)
-    if args.json:
-        print(result.to_json())
-    else:
-        print(result.table())
-        if args.plot:
-            print(f"picture written to {args.plot}")
-    return 0
+    return report(args, lambda status: flutter(
+        wing, args.speeds, elements=args.elements, modes=args.modes,
+        unsteady=not args.quasi_steady, progress=status))
 
 
 @cmd_flutter.arguments
@@ -219,24 +226,10 @@ def schedule_from_args(args) -> dict:
                      "deflections.")
 def cmd_operating_points(args) -> int:
     from ..analyses.operating_points import operating_points
-    from .status import ProgressLine
     turbine = load(args.turbine)
     schedule = schedule_from_args(args)
-    status = ProgressLine(not args.json)
-    try:
-        result = operating_points(turbine, args.wind, schedule, elements=args.elements,
-                                  progress=status)
-    finally:
-        status.close()
-    if args.plot:
-        result.plot(args.plot)
-    if args.json:
-        print(result.to_json())
-    else:
-        print(result.table())
-        if args.plot:
-            print(f"picture written to {args.plot}")
-    return 0
+    return report(args, lambda status: operating_points(
+        turbine, args.wind, schedule, elements=args.elements, progress=status))
 
 
 @cmd_operating_points.arguments
