@@ -41,14 +41,14 @@ def main():
               f"pitch {opt['pitch_deg']:.3g} deg")
 
 
-    from hawt_core.analyses.operating_points import operating_points
-    from hawt_core.io.discon import discon_schedule
-    import importlib.util
     from pathlib import Path
-    spec = importlib.util.find_spec("rosco")
-    if spec is not None:
-        deck = Path(spec.origin).resolve().parents[1] / "Examples" / "Test_Cases"
-        schedule = discon_schedule(deck / "NREL-5MW" / "DISCON.IN")
+
+    from hawt_core.analyses.operating_points import operating_points
+    from hawt_core.io.catalog import shipped_controller
+    from hawt_core.io.discon import discon_schedule
+    controller = shipped_controller("nrel5mw")
+    if controller is not None:
+        schedule = discon_schedule(controller)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             turbine = load_any("nrel5mw")

@@ -25,7 +25,7 @@ import pytest
 from hawt_core.aero import BemRotor, HermiteTable, StationPolars, axial_induction
 from hawt_core.aero.bem import induction_from_thrust
 from hawt_core.analyses.aero_table import aero_table
-from hawt_core.io.catalog import load_any
+from hawt_core.io.catalog import load_any, rosco_test_cases
 from hawt_core.model import Aerodynamics, Polar
 
 HAWT = Path(sys.executable).parent / "hawt"
@@ -37,14 +37,11 @@ def nrel5mw():
         return load_any("nrel5mw")
 
 
-def rosco_examples() -> Path:
-    import importlib.util
-    spec = importlib.util.find_spec("rosco")
-    if spec is None:
+def rosco_decks() -> Path:
+    """The rosco wheel's Examples/Test_Cases (skips without the wheel)."""
+    root = rosco_test_cases()
+    if root is None:
         pytest.skip("the rosco wheel is not installed")
-    root = Path(spec.origin).resolve().parents[1] / "Examples"
-    if not root.is_dir():
-        pytest.skip(f"no rosco Examples folder at {root}")
     return root
 
 
@@ -219,7 +216,7 @@ def test_nrel5mw_against_roscos_table(tmp_path):
     maximum Cp; Ct within 3 % and Cp within 5 % where the rotor operates (Cp > 0.3, pitch >=
     0; hawt's Cp is 1-4 % higher there, as the tilt alone, cos^3(5 deg), makes 1.1 %). hawt's
     own file, read back by ROSCO's reader (transliterated), holds hawt's numbers (1e-6)."""
-    ref = rosco_examples() / "Test_Cases" / "NREL-5MW" / "Cp_Ct_Cq.NREL5MW.txt"
+    ref = rosco_decks() / "NREL-5MW" / "Cp_Ct_Cq.NREL5MW.txt"
     pitch, tsr, cp, ct, cq = load_from_txt(ref)
     table = aero_table(nrel5mw(), tsr, np.degrees(pitch), wind_speed=11.4)
     i, j = np.unravel_index(np.argmax(cp), cp.shape)

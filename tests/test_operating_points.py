@@ -24,7 +24,7 @@ import numpy as np
 import pytest
 
 from test_aero_blade import nrel5mw
-from test_bem import rosco_examples
+from test_bem import rosco_decks
 
 from hawt_core.analyses.operating_points import operating_points
 from hawt_core.io.catalog import load_any
@@ -34,7 +34,7 @@ JONKMAN_PITCH = {12.0: 3.83, 14.0: 8.70, 18.0: 14.92, 25.0: 23.47}
 
 
 def schedule():
-    return discon_schedule(rosco_examples() / "Test_Cases" / "NREL-5MW" / "DISCON.IN")
+    return discon_schedule(rosco_decks() / "NREL-5MW" / "DISCON.IN")
 
 
 def shipped():

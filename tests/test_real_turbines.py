@@ -27,10 +27,9 @@ from hawt_core.analyses.blade_modes import blade_modes
 from hawt_core.cli import main as hawt_main
 from hawt_core.io import TurbineFileError, TurbineFileWarning, dump_turbine, load_turbine
 from hawt_core.io import turbines_equal
-from hawt_core.io.catalog import SHIPPED, load_any, shipped_turbines
+from hawt_core.io.catalog import SHIPPED, load_any, rosco_test_cases, shipped_turbines
 
-_spec = importlib.util.find_spec("Examples")
-DECKS = Path(list(_spec.submodule_search_locations)[0]) / "Test_Cases" if _spec else None
+DECKS = rosco_test_cases()
 needs_decks = pytest.mark.skipif(
     DECKS is None or importlib.util.find_spec("openfast_io") is None,
     reason="needs the rosco wheel (decks) and openfast-io: bash scripts/bootstrap.sh")

@@ -168,34 +168,15 @@ def _flutter_args(p):
                    help="write frequency and damping against speed to this PNG file")
 
 
-#: The rosco wheel's controller file of each shipped turbine (under its Examples/Test_Cases).
-SHIPPED_CONTROLLERS = {
-    "nrel5mw": "NREL-5MW/DISCON.IN",
-    "iea15mw": "IEA-15-240-RWT/IEA-15-240-RWT-Monopile/IEA-15-240-RWT-Monopile_DISCON.IN",
-}
-
-
-def rosco_examples():
-    """The rosco wheel's Examples/Test_Cases folder, or None."""
-    import importlib.util
-    from pathlib import Path
-    spec = importlib.util.find_spec("rosco")
-    if spec is None or spec.origin is None:
-        return None
-    root = Path(spec.origin).resolve().parents[1] / "Examples" / "Test_Cases"
-    return root if root.is_dir() else None
-
-
 def schedule_from_args(args) -> dict:
     """The operating-point schedule: --controller FILE, the shipped turbine's DISCON.IN from
     the rosco wheel, or the values given; each given value overrides the file's."""
     import math
+    from ..io.catalog import shipped_controller
     from ..io.discon import discon_schedule
     path = args.controller
-    if path is None and args.turbine in SHIPPED_CONTROLLERS:
-        root = rosco_examples()
-        if root is not None:
-            path = root / SHIPPED_CONTROLLERS[args.turbine]
+    if path is None:
+        path = shipped_controller(args.turbine)
     s = discon_schedule(path) if path is not None else {}
     given = {"rated_power": None if args.rated_power is None else 1e3 * args.rated_power,
              "rated_speed": None if args.rated_rpm is None else args.rated_rpm * math.pi / 30,

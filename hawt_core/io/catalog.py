@@ -18,14 +18,17 @@ the ``rosco`` wheel installs; their header comment names the source and importer
 """
 from __future__ import annotations
 
+import importlib.util
 import warnings
 from pathlib import Path
+from typing import Optional
 
 from ..model import Turbine
 from .turbine_yaml import (TurbineFileError, TurbineFileWarning, check_regular_file,
                            default_turbine_path, load_turbine)
 
-__all__ = ["SHIPPED", "shipped_path", "shipped_turbines", "load_any", "describe", "is_windio"]
+__all__ = ["SHIPPED", "shipped_path", "shipped_turbines", "load_any", "describe", "is_windio",
+           "rosco_test_cases", "shipped_controller", "SHIPPED_CONTROLLERS"]
 
 _DATA = Path(__file__).resolve().parent.parent / "data"
 
@@ -36,6 +39,33 @@ SHIPPED = {
     "nrel5mw": "nrel5mw.yaml",
     "iea15mw": "iea15mw.yaml",
 }
+
+
+#: The rosco wheel's controller file (DISCON.IN) of each shipped turbine, under its
+#: Examples/Test_Cases.
+SHIPPED_CONTROLLERS = {
+    "nrel5mw": "NREL-5MW/DISCON.IN",
+    "iea15mw": "IEA-15-240-RWT/IEA-15-240-RWT-Monopile/IEA-15-240-RWT-Monopile_DISCON.IN",
+}
+
+
+def rosco_test_cases() -> Optional[Path]:
+    """The rosco wheel's Examples/Test_Cases folder (complete OpenFAST decks, airfoil polars,
+    DISCON.IN and Cp_Ct_Cq files; the wheel installs a top-level ``Examples`` package), or
+    None when the wheel is not installed."""
+    spec = importlib.util.find_spec("Examples")
+    if spec is None or not spec.submodule_search_locations:
+        return None
+    root = Path(list(spec.submodule_search_locations)[0]) / "Test_Cases"
+    return root if root.is_dir() else None
+
+
+def shipped_controller(name: str) -> Optional[Path]:
+    """The DISCON.IN the rosco wheel ships for the shipped turbine ``name``, or None."""
+    root = rosco_test_cases()
+    if root is None or name not in SHIPPED_CONTROLLERS:
+        return None
+    return root / SHIPPED_CONTROLLERS[name]
 
 
 def shipped_path(name: str) -> Path:
