@@ -95,20 +95,13 @@ def check_perturbation_value(name: str, value) -> float:
     return v
 
 
-def check_number(field: str, value, minimum=None, positive=False, maximum=None,
-                 unit: str = "") -> float:
-    """A finite number (> 0 with ``positive``, >= ``minimum``, <= ``maximum`` when given);
-    the message states the whole allowed range."""
+def check_number(field: str, value, minimum=None, positive=False) -> float:
+    """A finite number (> 0 with ``positive``, >= ``minimum`` when given); the message states
+    the whole allowed range."""
     v = _float(value)
-    need = ["a finite number"]
-    if positive:
-        need.append("> 0")
-    elif minimum is not None:
-        need.append(f">= {minimum:g}")
-    if maximum is not None:
-        need.append(("and " if len(need) > 1 else "") + f"<= {maximum:g}")
-    text = " ".join(need) + (f" [{unit}]" if unit else "")
+    need = "a finite number" + (" > 0" if positive else
+                                f" >= {minimum:g}" if minimum is not None else "")
     if not (math.isfinite(v) and (not positive or v > 0)
-            and (minimum is None or v >= minimum) and (maximum is None or v <= maximum)):
-        raise ValueError(f"{field}: {short_repr(value)} is not allowed; need {text}")
+            and (minimum is None or v >= minimum)):
+        raise ValueError(f"{field}: {short_repr(value)} is not allowed; need {need}")
     return v

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["AeroTable", "read_rosco_table"]
+__all__ = ["AeroTable"]
 
 
 @dataclass
@@ -72,7 +72,7 @@ class AeroTable:
 
     def plot(self, path) -> Path:
         """Cp and Ct contours against tip-speed ratio and pitch, the optimum marked."""
-        from .plotting import _pyplot
+        from .plotting import _pyplot, save_png
         plt = _pyplot()
         fig, axes = plt.subplots(1, 2, figsize=(11, 4.4), sharey=True)
         P, T = np.meshgrid(self.pitch_deg, self.tsr)
@@ -94,35 +94,5 @@ class AeroTable:
         axes[0].legend(fontsize=8, loc="upper right")
         fig.suptitle(f"{self.turbine}: aerodynamic coefficients", fontsize=11)
         fig.tight_layout()
-        path = Path(path)
-        fig.savefig(path, format="png", dpi=100)
-        plt.close(fig)
-        return path
+        return save_png(fig, path)
 
-
-def read_rosco_table(path) -> dict:
-    """ROSCO's Cp_Ct_Cq text file -> {"pitch_deg", "tsr", "wind_speed", "cp", "ct", "cq"}
-    (the layout of rosco.toolbox.utilities.load_from_txt)."""
-    lines = Path(path).read_text().splitlines()
-    out, i = {}, 0
-    names = {"Power": "cp", "Thrust": "ct", "Torque": "cq"}
-    while i < len(lines):
-        line = lines[i]
-        if "Pitch angle" in line:
-            out["pitch_deg"] = np.array(lines[i + 1].split(), float)
-            i += 1
-        elif "TSR" in line:
-            out["tsr"] = np.array(lines[i + 1].split(), float)
-            i += 1
-        elif "Wind speed" in line:
-            out["wind_speed"] = np.array(lines[i + 1].split(), float)
-            i += 1
-        else:
-            for word, key in names.items():
-                if word in line:
-                    n = len(out["tsr"])
-                    out[key] = np.array([lines[i + 2 + k].split() for k in range(n)], float)
-                    i += 1 + n
-                    break
-        i += 1
-    return out
