@@ -63,7 +63,7 @@ class FlutterResult:
 
     def plot(self, path) -> Path:
         """Frequency and damping ratio against speed, the flutter point marked."""
-        from .plotting import _pyplot
+        from .plotting import _pyplot, save_png
         plt = _pyplot()
         fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 7), sharex=True)
         for k in range(self.frequency.shape[1]):
@@ -84,7 +84,4 @@ class FlutterResult:
         for ax in (a1, a2):
             ax.grid(True, alpha=0.3)
         fig.tight_layout()
-        path = Path(path)
-        fig.savefig(path, format="png", dpi=100)
-        plt.close(fig)
-        return path
+        return save_png(fig, path)

@@ -54,7 +54,7 @@ class OperatingPoints:
 
     def plot(self, path) -> Path:
         """Rotor speed, pitch, power, thrust, Cp/Ct and tip deflection against wind speed."""
-        from .plotting import _pyplot
+        from .plotting import _pyplot, save_png
         plt = _pyplot()
         U = self.column("wind_speed")
         fig, axes = plt.subplots(3, 2, figsize=(10, 8.5), sharex=True)
@@ -75,7 +75,4 @@ class OperatingPoints:
             ax.set_xlabel("wind speed [m/s]")
         fig.suptitle(f"{self.turbine}: aeroelastic operating points", fontsize=11)
         fig.tight_layout()
-        path = Path(path)
-        fig.savefig(path, format="png", dpi=100)
-        plt.close(fig)
-        return path
+        return save_png(fig, path)

@@ -21,6 +21,14 @@ def _pyplot():
     return plt
 
 
+def save_png(fig, path, dpi: int = 100) -> Path:
+    """Write the figure ``fig`` to the PNG file ``path`` and close it."""
+    path = Path(path)
+    fig.savefig(path, format="png", dpi=dpi)
+    _pyplot().close(fig)
+    return path
+
+
 def plot_blade_modes(result, path, count: int = 6) -> Path:
     """Write the first ``count`` mode shapes of ``result`` to the PNG file ``path``."""
     plt = _pyplot()
@@ -51,10 +59,7 @@ def plot_blade_modes(result, path, count: int = 6) -> Path:
     fig.suptitle(f"Blade modes at {result.rotor_speed:.4g} rad/s, {result.elements} elements",
                  fontsize=11)
     fig.tight_layout()
-    path = Path(path)
-    fig.savefig(path, format="png", dpi=100)
-    plt.close(fig)
-    return path
+    return save_png(fig, path)
 
 
 # ============================================================================ turbine modes
@@ -360,10 +365,7 @@ def plot_turbine_modes(result, path_or_dir, modes=None) -> list:
             fig.suptitle(f"{_mode_title(m)}\n{m.frequency_hz:.4g} Hz, damping "
                          f"{m.damping_ratio:.2e}, displacements x{amp:.3g}", fontsize=11)
             fig.tight_layout()
-            out = target / f"{mode_file_stem(pos, m)}.png"
-            fig.savefig(out, format="png", dpi=90)
-            plt.close(fig)
-            written.append(out)
+            written.append(save_png(fig, target / f"{mode_file_stem(pos, m)}.png", dpi=90))
         return written
     nrow = len(sel)
     fig, axes = plt.subplots(nrow, 3, figsize=(12.6, 5.0 * nrow), squeeze=False)
@@ -374,8 +376,7 @@ def plot_turbine_modes(result, path_or_dir, modes=None) -> list:
         row[0].text(0.02, 0.98, _mode_title(m), transform=row[0].transAxes,
                     va="top", fontsize=10, fontweight="bold")
     fig.tight_layout()
-    fig.savefig(target, format="png", dpi=80)
-    plt.close(fig)
+    save_png(fig, target, dpi=80)
     return [target]
 
 
@@ -508,7 +509,4 @@ def plot_campbell(result, path, max_hz=None, max_rays: int = 12, tracks="table2"
     axd.grid(True, alpha=0.3)
     fig.tight_layout()
     fig.subplots_adjust(right=0.78)
-    path = Path(path)
-    fig.savefig(path, format="png", dpi=100)
-    plt.close(fig)
-    return path
+    return save_png(fig, path)
