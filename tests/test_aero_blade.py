@@ -89,13 +89,10 @@ def shaft_power(m, y):
     """(through the root, of the distributed loads) [W] for one blade."""
     d = {}
     m.residual(np.zeros(m.n), y, details=d)
-    F0, M0 = y[0:3], y[3:6]
-    e = m.hub_r / m.cos_cone
-    s3 = m.axes[0]
-    torque_root = np.dot(M0 + np.cross([e, 0.0, 0.0], F0), s3)
+    torque_root = m.root_loads(y)[0]
     beam = m.beam
     weights = beam.h[:, None] * beam.w[None, :]              # Gauss weights per element
-    aero = np.sum(d["drive"][..., 0] * m.r[..., 0] / m.cos_cone * weights) * 1.0
+    aero = np.sum(d["drive"][..., 0] * m.r[..., 0] / m.cos_cone * weights)
     return torque_root * m.omega, aero * m.omega
 
 

@@ -40,6 +40,7 @@ from ..model import Turbine
 from ..numerics.jacobian import ColouredJacobian, block_tridiagonal_pattern
 from ..numerics.newton import newton
 from ..numerics.rotations import atan2
+from ..fem.beam import BLOCK_SIZE, ROOT_F, ROOT_M, U_
 from .spinning_blade import SpinningBlade
 
 __all__ = ["AeroelasticBlade"]
@@ -88,6 +89,7 @@ class AeroelasticBlade:
         self.frames = np.ascontiguousarray(
             self.beam.props.element_frames()[:, None, None, :, :])       # (N, 1, 1, 3, 3)
         self.r = ((e + xg) * self.cos_cone)[:, :, None]      # distance from the shaft [m]
+        self.hub_radius = float(e)                          # root point on b1 [m]
         self.hub_r = e * self.cos_cone
         self.tip_r = (e + L) * self.cos_cone
         # shaft axis and direction of motion in the root frame b (precone about b2)
@@ -163,8 +165,9 @@ class AeroelasticBlade:
             air = U * (1.0 - a)[..., None] * s3 - (ap * Om * self.r)[..., None] * tt
             W = air - V
             W2, W3 = W[..., 1], W[..., 2]
-            q = 0.5 * self.rho * (W2 * W2 + W3 * W3)
-            w = np.sqrt(W2 * W2 + W3 * W3)
+            w2 = W2 * W2 + W3 * W3
+            q = 0.5 * self.rho * w2
+            w = np.sqrt(w2)
             alpha = atan2(W3, -W2) + self.tau
             cl, cd, cm = self.polars.coefficients(alpha.transpose(2, 0, 1).reshape(B, -1))
             shape = alpha.shape
@@ -177,10 +180,8 @@ class AeroelasticBlade:
             moment = np.zeros(W.shape, dtype=W.dtype)
             moment[..., 0] = qc * self.chord * cm
             # thrust (along s3) and driving force (along t) per unit blade length
-            thrust = force[..., 1] * s3[..., 1] + force[..., 2] * s3[..., 2] \
-                + force[..., 0] * s3[..., 0]
-            drive = force[..., 1] * tt[..., 1] + force[..., 2] * tt[..., 2] \
-                + force[..., 0] * tt[..., 0]
+            thrust = np.sum(force * s3, axis=-1)
+            drive = np.sum(force * tt, axis=-1)
             # the inflow angle in the rotor frame for Prandtl's factors
             Wa = np.sum(W * s3, axis=-1)
             Wt = -np.sum(W * tt, axis=-1)
@@ -235,15 +236,15 @@ class AeroelasticBlade:
         """(shaft torque [N m], thrust [N]) of this blade through its root: the root force
         and moment about the shaft axis (the inertial loads of steady rotation have no
         moment about it and no component along it)."""
-        F0, M0 = y[0:3], y[3:6]
-        e = self.hub_r / self.cos_cone
+        F0, M0 = y[ROOT_F], y[ROOT_M]
         s3 = self.axes[0]
-        return float(np.dot(M0 + np.cross([e, 0.0, 0.0], F0), s3)), float(np.dot(F0, s3))
+        torque = np.dot(M0 + np.cross([self.hub_radius, 0.0, 0.0], F0), s3)
+        return float(torque), float(np.dot(F0, s3))
 
     def tip_deflection(self, y):
         """(flap along b3, edge along b2) [m] of the tip in the root frame."""
-        o = self.n_beam - 18 + 6
-        return float(y[o + 2]), float(y[o + 1])
+        u = y[self.n_beam - BLOCK_SIZE:self.n_beam][U_]          # the last node's u
+        return float(u[2]), float(u[1])
 
     def jacobian(self, y):
         """dR/dy (n, n) at ydot = 0, sparse, exact by complex step (coloured columns, one
