@@ -6,6 +6,9 @@ row in the sparsity pattern are perturbed together (one residual call per colour
 """
 from __future__ import annotations
 
+import hashlib
+from collections import OrderedDict
+
 import numpy as np
 import scipy.sparse as sp
 
@@ -48,13 +51,37 @@ def greedy_colouring(pattern: sp.spmatrix) -> np.ndarray:
     return colour
 
 
+#: Colourings of the patterns seen last (models are rebuilt with the same mesh many times:
+#: an operating-point sweep builds one per pitch it tries): pattern key -> colours.
+_COLOURINGS: "OrderedDict[tuple, np.ndarray]" = OrderedDict()
+_COLOURINGS_KEPT = 16
+
+
+def _colouring(pattern: sp.csc_matrix) -> np.ndarray:
+    """greedy_colouring of a canonical (sorted, summed) CSC pattern, remembered."""
+    digest = hashlib.sha1(pattern.indptr.tobytes())
+    digest.update(pattern.indices.tobytes())
+    key = (pattern.shape, pattern.nnz, digest.digest())
+    colour = _COLOURINGS.get(key)
+    if colour is None:
+        colour = greedy_colouring(pattern)
+        colour.setflags(write=False)
+        _COLOURINGS[key] = colour
+        if len(_COLOURINGS) > _COLOURINGS_KEPT:
+            _COLOURINGS.popitem(last=False)
+    else:
+        _COLOURINGS.move_to_end(key)
+    return colour
+
+
 class ColouredJacobian:
     """Sparse complex-step Jacobian of ``fun(x) -> (m,)`` with a fixed sparsity ``pattern``."""
 
     def __init__(self, pattern: sp.spmatrix):
         self.pattern = sp.csc_matrix(pattern, dtype=bool)
         self.pattern.sum_duplicates()
-        self.colour = greedy_colouring(self.pattern)
+        self.pattern.sort_indices()
+        self.colour = _colouring(self.pattern)
         self.n_colours = int(self.colour.max()) + 1 if len(self.colour) else 0
         coo = self.pattern.tocoo()
         self._rows, self._cols = coo.row, coo.col
