@@ -62,17 +62,23 @@ def operating_points(turbine, wind_speeds, schedule: dict, elements: Optional[in
     Bn = turbine.rotor.blades
     points = []
     state = {"y": None}
+    solved = {}          # (U, omega, pitch) -> solution: Brent's method asks again for its ends
 
     def solve(U, omega, pitch):
+        key = (float(U), float(omega), float(pitch))
+        if key in solved:
+            return solved[key]
         t = replace(turbine, rotor=replace(turbine.rotor, speed=omega, pitch=-pitch))
         m = AeroelasticBlade(t, U, elements=n_el, rho=rho)
         y0 = state["y"] if state["y"] is not None and state["y"].size == m.n else None
         y = m.steady_state(y0=y0)
         state["y"] = y
         torque, thrust = m.root_loads(y)
-        return m, y, Bn * torque * omega, Bn * thrust
+        solved[key] = m, y, Bn * torque * omega, Bn * thrust
+        return solved[key]
 
     for i, U in enumerate(winds):
+        solved.clear()
         omega = float(np.clip(s["tsr"] * U / R, s["min_speed"], s["rated_speed"]))
         pitch = s["fine_pitch"]
         converged, region = True, 2
