@@ -7,7 +7,7 @@ from __future__ import annotations
 import difflib
 import math
 from collections.abc import Mapping
-from typing import Any, Optional
+from typing import Any, Callable, Optional
 
 import numpy as np
 
@@ -90,24 +90,17 @@ class _Checker:
         self.errors: list = []
         self.warnings: list = []
 
-    @property
-    def full(self) -> bool:
-        """True once MAX_MESSAGES problems are collected (the rest are counted only)."""
-        return len(self.errors) >= MAX_MESSAGES
-
-    def add(self, message: str):
+    def add(self, message: Callable[[], str]):
+        """Record the problem ``message()`` builds; past MAX_MESSAGES, note once that there
+        are more (and build no further messages)."""
         if len(self.errors) < MAX_MESSAGES:
-            self.errors.append(message)
+            self.errors.append(message())
         elif len(self.errors) == MAX_MESSAGES:
             self.errors.append(f"(more problems not listed: hawt stops after {MAX_MESSAGES})")
 
     def error(self, path: str, what: str, value: Any = ...):
-        if self.full:
-            self.add("")
-        elif value is ...:
-            self.add(f"{path}: {what}")
-        else:
-            self.add(f"{path} = {_show(value)}: {what}")
+        self.add(lambda: f"{path}: {what}" if value is ... else
+                 f"{path} = {_show(value)}: {what}")
 
     # -- structure ---------------------------------------------------------------------------
     def mapping(self, value: Any, path: str, spec: dict) -> Optional[Mapping]:
@@ -126,17 +119,17 @@ class _Checker:
         return value
 
     def unknown_key(self, path: str, key: Any, spec: dict):
-        if self.full:
-            return self.add("")
-        hint = ""
-        close = difflib.get_close_matches(str(key), list(spec), n=1, cutoff=0.6)
-        if isinstance(key, str) and key.endswith(("_deg", "_rpm", "_degrees")):
-            base = key.rsplit("_", 1)[0]
-            if base in spec:
-                hint = f"; angles and speeds are in radians (rad/s): use '{base}'"
-        if not hint and close:
-            hint = f"; did you mean '{close[0]}'?"
-        self.add(f"{path}: unknown key{hint} (allowed: {', '.join(spec)})")
+        def message():
+            hint = ""
+            close = difflib.get_close_matches(str(key), list(spec), n=1, cutoff=0.6)
+            if isinstance(key, str) and key.endswith(("_deg", "_rpm", "_degrees")):
+                base = key.rsplit("_", 1)[0]
+                if base in spec:
+                    hint = f"; angles and speeds are in radians (rad/s): use '{base}'"
+            if not hint and close:
+                hint = f"; did you mean '{close[0]}'?"
+            return f"{path}: unknown key{hint} (allowed: {', '.join(spec)})"
+        self.add(message)
 
     # -- scalars -----------------------------------------------------------------------------
     def number(self, d: Mapping, key: str, path: str, rule: str, default: Any = None):

@@ -427,8 +427,8 @@ def _aerodynamics(c: _Checker, value: Any) -> Optional[Aerodynamics]:
 
 def _build(c: _Checker, data: Any, default_name: str) -> Optional[Turbine]:
     if not isinstance(data, Mapping):
-        c.add(f"the turbine must be a mapping with the sections {', '.join(_TOP)}; "
-                        f"got {_type_name(data)}: {_show(data)}")
+        c.add(lambda: f"the turbine must be a mapping with the sections {', '.join(_TOP)}; "
+                      f"got {_type_name(data)}: {_show(data)}")
         return None
     c.mapping(data, "", _TOP)
 
