@@ -52,7 +52,7 @@ from ..results.plotting import mode_label
 from .modal import (DEFAULT_MAX_PER_REV, DEFAULT_STEPS, MAX_STEPS, STEPS_PER_CYCLE,
                     modal_analysis, validate_request)
 
-__all__ = ["campbell", "campbell_point", "track_modes", "unwrap_harmonics", "check_speeds"]
+__all__ = ["campbell", "campbell_in_wind", "campbell_point", "track_modes", "unwrap_harmonics", "check_speeds"]
 
 
 #: Weight of the relative frequency change (after the harmonic re-indexing found by the MAC)
@@ -108,7 +108,8 @@ def campbell_point(task: dict) -> dict:
     """One rotor speed: modal analysis and the plain-data summary used by :func:`campbell`.
 
     ``task``: ``{"turbine": Turbine, "speed": float [rad/s], "elements", "steps", "method",
-    "parent_pid": int}``.  Top-level and picklable (the analysis limits its BLAS threads
+    "parent_pid": int}``, and for a sweep in wind ``"wind"`` (aero.wind.Wind), ``"rho"`` and
+    ``"abscissa"`` (the wind speed: the sweep's variable, default the rotor speed).  Top-level and picklable (the analysis limits its BLAS threads
     itself: hawt_core.threads).
 
     Returns ``{"speed", "modes": [mode dict + "label", ...], "vectors": complex (m, n_modes)
@@ -122,7 +123,8 @@ def campbell_point(task: dict) -> dict:
         warnings.simplefilter("always")
         res = modal_analysis(task["turbine"], elements=task.get("elements"),
                              rotor_speed=float(task["speed"]), steps=task.get("steps"),
-                             method=task.get("method"), max_per_rev=task.get("max_per_rev"))
+                             method=task.get("method"), max_per_rev=task.get("max_per_rev"),
+                             wind=task.get("wind"), rho=task.get("rho", 1.225))
     band = task.get("max_hz")
     if band is not None:        # one band in Hz for the whole sweep, in the sweep's frame
         fixed = task.get("frame") == "fixed"
@@ -141,6 +143,7 @@ def campbell_point(task: dict) -> dict:
         d["label"] = mode_label(m)
         modes.append(d)
     return {"speed": float(res.model.rotor_speed), "modes": modes,
+            "abscissa": float(task.get("abscissa", res.model.rotor_speed)),
             "vectors": np.ascontiguousarray(vectors), "harmonics": harmonics,
             "settings": dict(res.settings),
             "unresolved": int(res.unresolved), "compute_time": float(res.compute_time),
@@ -199,6 +202,9 @@ def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
     S = len(points)
     tracks: list = []   # dicts: label info, per-speed values, reference vector and its offset
     speeds = np.array([float(p.get("speed", np.nan)) for p in points])
+    # the sweep's variable (the rotor speed, or the wind speed of a sweep in wind): curves
+    # are continued and interpolated along it; per-rev values convert with the speeds
+    x = np.array([float(p.get("abscissa", p.get("speed", np.nan))) for p in points])
 
     def new_track(m, v):
         t = {"label": m["label"], "family": m["family"], "symmetry": m["symmetry"],
@@ -259,7 +265,7 @@ def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
         for j, m in enumerate(modes):
             if j not in taken:
                 put(new_track(m, V[..., j]), i, m, V[..., j], float("nan"), 0, w)
-    tracks = _merge_fragments(tracks, speeds, step)
+    tracks = _merge_fragments(tracks, speeds, step, x)
     # unique labels (a label reused by a track born later gets a suffix)
     seen = {}
     out = []
@@ -273,7 +279,7 @@ def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
         # re-indexings only decide the assignment: reported frequencies follow the motion
         # that names a mode, and a re-indexing the MAC prefers between two mixed vectors
         # would put a spike into a smooth curve)
-        shift = unwrap_harmonics(speeds, v[:, 0])
+        shift = unwrap_harmonics(speeds, v[:, 0], abscissa=x)
         sh0 = np.nan_to_num(shift)
         rev_hz = speeds / (2 * np.pi)
         cont = v[:, 0] + sh0
@@ -298,13 +304,15 @@ def _track_hz(t: dict, speeds: np.ndarray) -> np.ndarray:
     return (v[:, 0] + np.nan_to_num(v[:, 5])) * speeds / (2 * np.pi)
 
 
-def _merge_fragments(tracks: list, speeds: np.ndarray, step: int) -> list:
+def _merge_fragments(tracks: list, speeds: np.ndarray, step: int, x=None) -> list:
     """Merge every short track (at most FRAGMENT_POINTS speeds) into the longer track that
     misses all of its speeds and whose frequency there (interpolated linearly in Hz between
     its neighbouring speeds, or extrapolated from its last two) the fragment continues within
     FRAGMENT_TOL, allowing whole re-indexings by multiples of ``step`` per-rev (up to
-    FRAGMENT_SHIFT); the merged points keep their values with MAC NaN."""
+    FRAGMENT_SHIFT); the merged points keep their values with MAC NaN.  ``x``: the sweep's
+    variable (default the speeds), along which the frequencies are interpolated."""
     rev = speeds / (2 * np.pi)
+    x = speeds if x is None else np.asarray(x, float)
     kept = list(tracks)
     for frag in sorted(tracks, key=lambda t: np.isfinite(t["vals"][:, 0]).sum()):
         have = np.isfinite(frag["vals"][:, 0])
@@ -319,14 +327,14 @@ def _merge_fragments(tracks: list, speeds: np.ndarray, step: int) -> list:
             if ok[idx].any() or ok.sum() <= have.sum() or ok.sum() < 2:
                 continue
             f = _track_hz(cand, speeds)
-            pred = np.interp(speeds[idx], speeds[ok], f[ok])
+            pred = np.interp(x[idx], x[ok], f[ok])
             # beyond the ends: linear extrapolation from the two nearest points
             for j, i in enumerate(idx):
                 if i < np.flatnonzero(ok)[0] or i > np.flatnonzero(ok)[-1]:
                     near = np.flatnonzero(ok)[:2] if i < np.flatnonzero(ok)[0] \
                         else np.flatnonzero(ok)[-2:]
                     (a, b) = near
-                    pred[j] = f[b] + (f[b] - f[a]) / (speeds[b] - speeds[a]) * (speeds[i] - speeds[b])
+                    pred[j] = f[b] + (f[b] - f[a]) / (x[b] - x[a]) * (x[i] - x[b])
             for k in range(-FRAGMENT_SHIFT, FRAGMENT_SHIFT + 1):
                 if k % max(1, step):
                     continue
@@ -370,7 +378,8 @@ def _mark_twins(tracks: list, speeds: np.ndarray) -> None:
                 break
 
 
-def unwrap_harmonics(speeds: np.ndarray, per_rev: np.ndarray, tol: float = 0.25) -> np.ndarray:
+def unwrap_harmonics(speeds: np.ndarray, per_rev: np.ndarray, tol: float = 0.25,
+                     abscissa=None) -> np.ndarray:
     """Integer per-rev shifts that make a track continuous.
 
     A Floquet exponent is defined up to i k Omega; modal_analysis reports the dominant
@@ -379,26 +388,30 @@ def unwrap_harmonics(speeds: np.ndarray, per_rev: np.ndarray, tol: float = 0.25)
     compared with the prediction from the track's previous (continuous) values, linear in Hz
     from the last two (constant Hz from one); the nearest integer shift is applied when it
     brings the value within ``tol`` per-rev of the prediction.  The first value is never
-    shifted.  NaN where the track is absent; all zeros when the speeds are unknown."""
+    shifted.  NaN where the track is absent; all zeros when the speeds are unknown.
+    ``abscissa``: the sweep's variable (default the speeds; a sweep in wind: the wind
+    speeds), along which the Hz are extrapolated."""
     per_rev = np.asarray(per_rev, float)
     shift = np.where(np.isfinite(per_rev), 0.0, np.nan)
     if not np.all(np.isfinite(speeds)):
         return shift
-    hist = []                                   # (speed, continuous Hz)
+    xs = speeds if abscissa is None else np.asarray(abscissa, float)
+    hist = []                                   # (abscissa, continuous Hz)
     for i, (w, f) in enumerate(zip(speeds, per_rev)):
         if not np.isfinite(f):
             continue
+        xi = xs[i]
         if hist:
             if len(hist) >= 2 and hist[-1][0] != hist[-2][0]:
                 (wa, ca), (wb, cb) = hist[-2], hist[-1]
-                pred_hz = cb + (cb - ca) / (wb - wa) * (w - wb)
+                pred_hz = cb + (cb - ca) / (wb - wa) * (xi - wb)
             else:
                 pred_hz = hist[-1][1]
             pred = pred_hz * 2 * np.pi / w
             k = float(np.round(pred - f))
             if k != 0 and abs(f + k - pred) < tol:
                 shift[i] = k
-        hist.append((w, (f + shift[i]) * w / (2 * np.pi)))
+        hist.append((xi, (f + shift[i]) * w / (2 * np.pi)))
     return shift
 
 
@@ -424,6 +437,34 @@ def _failed_point(speed: float, exc: BaseException, rows: int) -> dict:
             "error": f"{type(exc).__name__}: {' '.join(str(exc).split())}", "pid": None}
 
 
+def _check_sweep(turbine, errors: str, frame: Optional[str]) -> str:
+    """Validate ``errors`` and ``frame`` (default: fixed for 3+ blades); returns the frame."""
+    if errors not in ("skip", "raise"):
+        raise ValueError(f"errors: {errors!r} is not allowed; use 'skip' or 'raise'")
+    blades = int(turbine.rotor.blades)
+    if frame is None:
+        frame = "fixed" if blades >= 3 else "rotating"
+    if frame not in FRAMES:
+        raise ValueError(f"frame: {frame!r} is not allowed; use 'fixed' or 'rotating'")
+    if frame == "fixed" and blades < 3:
+        raise ValueError(f"frame: 'fixed' is not allowed for {blades} blade(s); multi-blade "
+                         "coordinates need three or more (use 'rotating')")
+    return frame
+
+
+def _sweep_band(speeds, steps, method, max_hz):
+    """(marching method, steps at the top speed, band [Hz]): the band defaults to what the
+    top rotor speed resolves with the steps asked for."""
+    rev_max = float(np.max(speeds)) / (2 * np.pi)
+    march = method if method in ("radau", "paper") else "radau"
+    base = int(steps) if steps is not None else DEFAULT_STEPS[march]
+    if max_hz is None:
+        max_hz = min(DEFAULT_MAX_PER_REV, base / STEPS_PER_CYCLE[march]) * rev_max
+    if not (math.isfinite(float(max_hz)) and float(max_hz) > 0):
+        raise ValueError(f"max_hz: {max_hz!r} is not allowed; need a finite number > 0 [Hz]")
+    return march, base, float(max_hz)
+
+
 def campbell(turbine: Turbine, speeds, elements: Optional[int] = None,
              steps: Optional[int] = None, method: Optional[str] = None,
              executor: Optional[cf.Executor] = None,
@@ -444,48 +485,46 @@ def campbell(turbine: Turbine, speeds, elements: Optional[int] = None,
     state that does not converge): that point gets no modes and an ``"error"`` message
     (``CampbellResult.failed``); if every speed fails the first error is raised.  "raise"
     raises the first failure."""
-    if errors not in ("skip", "raise"):
-        raise ValueError(f"errors: {errors!r} is not allowed; use 'skip' or 'raise'")
-    blades = int(turbine.rotor.blades)
-    if frame is None:
-        frame = "fixed" if blades >= 3 else "rotating"
-    if frame not in FRAMES:
-        raise ValueError(f"frame: {frame!r} is not allowed; use 'fixed' or 'rotating'")
-    if frame == "fixed" and blades < 3:
-        raise ValueError(f"frame: 'fixed' is not allowed for {blades} blade(s); multi-blade "
-                         "coordinates need three or more (use 'rotating')")
+    frame = _check_sweep(turbine, errors, frame)
     arr = np.sort(check_speeds(speeds))
     validate_request(elements, None, steps, method)
-    rev_max = arr[-1] / (2 * np.pi)
-    march = method if method in ("radau", "paper") else "radau"
-    base = int(steps) if steps is not None else DEFAULT_STEPS[march]
-    if max_hz is None:          # what the top speed resolves with the steps asked for
-        max_hz = min(DEFAULT_MAX_PER_REV, base / STEPS_PER_CYCLE[march]) * rev_max
-    if not (math.isfinite(float(max_hz)) and float(max_hz) > 0):
-        raise ValueError(f"max_hz: {max_hz!r} is not allowed; need a finite number > 0 [Hz]")
+    march, base, max_hz = _sweep_band(arr, steps, method, max_hz)
     max_hz = float(max_hz)
     t0 = time.perf_counter()
+    tasks = [{"turbine": turbine, "speed": float(w), "elements": elements, "method": method,
+              **_band(w, march, base, max_hz, frame)} for w in arr]
+    results, failures, workers = _run(tasks, executor, progress, "speeds",
+                                      lambda i: f"{arr[i]:.4g} rad/s done", errors)
+    return _assemble(turbine, arr, results, failures, errors, max_hz, frame, workers, t0)
+
+
+def _band(speed: float, march: str, base: int, max_hz: float, frame: str) -> dict:
+    """A task's band entries: the marching steps per period that resolve ``max_hz`` [Hz] at
+    the rotor ``speed`` [rad/s] (at least ``base``), and the band itself."""
+    rev = speed / (2 * np.pi)
+    need = int(math.ceil(STEPS_PER_CYCLE[march] * max_hz / rev - 1e-9))
+    return {"steps": int(min(MAX_STEPS, max(base, need))), "max_per_rev": 1.05 * max_hz / rev,
+            "max_hz": max_hz, "frame": frame, "parent_pid": os.getpid()}
+
+
+def _run(tasks, executor, progress, what: str, done_message, errors: str = "skip"):
+    """Run :func:`campbell_point` on every task (``executor``: default a process pool of
+    one worker per CPU, shut down afterwards; ``errors="raise"``: the first failure cancels
+    the rest and is raised); returns (results with None where a task
+    failed, [(index, exception)], the executor's worker count)."""
     own = executor is None
     if own:
         executor = cf.ProcessPoolExecutor(max_workers=os.cpu_count() or 1)
-    tasks = []
-    for w in arr:
-        rev = w / (2 * np.pi)
-        need = int(math.ceil(STEPS_PER_CYCLE[march] * max_hz / rev - 1e-9))
-        tasks.append({"turbine": turbine, "speed": float(w), "elements": elements,
-                      "steps": int(min(MAX_STEPS, max(base, need))), "method": method,
-                      "max_per_rev": 1.05 * max_hz / rev, "max_hz": max_hz, "frame": frame,
-                      "parent_pid": os.getpid()})
     results: list = [None] * len(tasks)
+    failures = []
     try:
         if progress is not None:
-            progress(0.0, f"0/{len(tasks)} speeds")
+            progress(0.0, f"0/{len(tasks)} {what}")
         futures = {executor.submit(campbell_point, t): i for i, t in enumerate(tasks)}
         if all(isinstance(f, cf.Future) for f in futures):
             done_iter = cf.as_completed(futures)
         else:  # foreign futures: wait in order
             done_iter = iter(futures)
-        failures = []
         for n, f in enumerate(done_iter, 1):
             i = futures[f]
             try:
@@ -495,8 +534,7 @@ def campbell(turbine: Turbine, speeds, elements: Optional[int] = None,
                     raise
                 failures.append((i, exc))
             if progress is not None:
-                progress(n / len(tasks), f"{n}/{len(tasks)} speeds "
-                                         f"({arr[i]:.4g} rad/s done)")
+                progress(n / len(tasks), f"{n}/{len(tasks)} {what} ({done_message(i)})")
     except BaseException:
         for f in futures if "futures" in locals() else ():
             try:
@@ -507,19 +545,90 @@ def campbell(turbine: Turbine, speeds, elements: Optional[int] = None,
     finally:
         if own:
             executor.shutdown(wait=True, cancel_futures=True)
+    return results, failures, getattr(executor, "_max_workers", None)
+
+
+def _assemble(turbine, speeds, results, failures, errors, max_hz, frame, workers, t0,
+              wind_speeds=None, extra=None) -> CampbellResult:
+    """Failed points, tracks and settings of a finished sweep (``errors`` as campbell's)."""
+    if failures and errors == "raise":
+        raise failures[0][1]
     ok = [r for r in results if r is not None]
     if not ok:
         raise failures[0][1]
     rows = ok[0]["vectors"].shape[0]
     for i, exc in failures:
-        results[i] = _failed_point(arr[i], exc, rows)
+        results[i] = _failed_point(speeds[i], exc, rows)
+        if wind_speeds is not None:
+            results[i]["abscissa"] = float(wind_speeds[i])
     tracks = track_modes(results)
     s0 = ok[0]["settings"]
     steps_used = sorted({r["settings"]["steps"] for r in ok if r["settings"].get("steps")})
     settings = {"turbine": turbine.name, "elements": s0["elements"], "method": s0["method"],
                 "steps": s0["steps"], "steps_range": (steps_used[0], steps_used[-1])
-                if steps_used else None, "fast": s0["fast"], "speeds": arr.tolist(),
-                "max_hz": max_hz, "frame": frame,
-                "workers": getattr(executor, "_max_workers", None)}
-    return CampbellResult(speeds=arr, tracks=tracks, points=results, settings=settings,
-                          compute_time=time.perf_counter() - t0, frame=frame)
+                if steps_used else None, "fast": s0["fast"], "speeds": list(map(float, speeds)),
+                "max_hz": max_hz, "frame": frame, "workers": workers, **(extra or {})}
+    return CampbellResult(speeds=np.asarray(speeds, float), tracks=tracks, points=results,
+                          settings=settings, compute_time=time.perf_counter() - t0,
+                          frame=frame, wind_speeds=None if wind_speeds is None
+                          else np.asarray(wind_speeds, float))
+
+
+def campbell_in_wind(turbine: Turbine, wind_speeds, schedule: dict,
+                     elements: Optional[int] = None, steps: Optional[int] = None,
+                     method: Optional[str] = None, executor: Optional[cf.Executor] = None,
+                     progress: Optional[Callable[[float, str], None]] = None,
+                     errors: str = "skip", frame: Optional[str] = None,
+                     max_hz: Optional[float] = None, rho: float = 1.225,
+                     direction: float = 0.0) -> CampbellResult:
+    """The aeroelastic Campbell diagram: at every wind speed [m/s] of ``wind_speeds`` the
+    operating point of ``schedule`` (analyses/operating_points.py: rotor speed and pitch),
+    then the Floquet analysis in that wind (modal_analysis(wind=...): frozen wake) as a
+    :func:`campbell_point` task on ``executor``; modes tracked along the wind speed.  The
+    result's ``speeds`` are the rotor speeds [rad/s] of the points, ``wind_speeds`` the
+    wind speeds; ``direction`` [rad]: the wind's yaw misalignment.  Other arguments as
+    :func:`campbell`'s; a point whose operating point or analysis fails is kept with its
+    error (``errors="skip"``)."""
+    from dataclasses import replace
+    from ..aero.wind import Wind
+    from .operating_points import operating_points
+    frame = _check_sweep(turbine, errors, frame)
+    winds = np.sort(np.atleast_1d(np.asarray(wind_speeds, float)))
+    if winds.ndim != 1 or winds.size < 1 or not np.all(np.isfinite(winds) & (winds > 0)):
+        raise ValueError("wind_speeds: need finite wind speeds > 0 [m/s]")
+    validate_request(elements, None, steps, method)
+    t0 = time.perf_counter()
+    if progress is not None:
+        progress(0.0, f"operating points at {winds.size} wind speeds")
+    op = operating_points(turbine, winds, schedule, rho=rho).points
+    speeds = np.array([p["rotor_speed_rpm"] * np.pi / 30 for p in op])
+    march, base, max_hz = _sweep_band(speeds, steps, method, max_hz)
+    tasks, where = [], []
+    for i, p in enumerate(op):
+        if not p["converged"]:
+            continue
+        t = replace(turbine, rotor=replace(turbine.rotor, speed=float(speeds[i]),
+                                           pitch=-np.radians(p["pitch_deg"])))
+        tasks.append({"turbine": t, "speed": float(speeds[i]), "elements": elements,
+                      "method": method, "wind": Wind(float(winds[i]), direction=direction),
+                      "rho": rho, "abscissa": float(winds[i]),
+                      **_band(speeds[i], march, base, max_hz, frame)})
+        where.append(i)
+    if not tasks:
+        raise ValueError(f"campbell: no operating point converged ({op[0].get('error')})")
+    done, failed, workers = _run(tasks, executor, progress, "wind speeds",
+                                 lambda j: f"{winds[where[j]]:.4g} m/s done", errors)
+    results: list = [None] * winds.size
+    failures = [(where[j], exc) for j, exc in failed]
+    for j, r in enumerate(done):
+        results[where[j]] = r
+    for i, p in enumerate(op):
+        if not p["converged"]:
+            failures.append((i, RuntimeError(f"operating point: {p.get('error')}")))
+    failures.sort(key=lambda f: f[0])
+    return _assemble(turbine, speeds, results, failures, errors, max_hz, frame, workers, t0,
+                     wind_speeds=winds, extra={
+                         "wind_speeds": winds.tolist(), "air_density": rho,
+                         "wind_direction_deg": float(np.degrees(direction)),
+                         "pitch_deg": [p["pitch_deg"] for p in op],
+                         "aerodynamics": "blade-element momentum, frozen wake"})

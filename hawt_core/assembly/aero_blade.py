@@ -35,11 +35,10 @@ import scipy.sparse as sp
 
 from ..aero.bem import induction_from_thrust, momentum_thrust
 from ..aero.inflow import OYE_K, oye_time_constants
-from ..aero.polars import StationPolars
+from ..aero.strip import BladeStrips
 from ..model import Turbine
 from ..numerics.jacobian import ColouredJacobian, block_tridiagonal_pattern
 from ..numerics.newton import newton
-from ..numerics.rotations import atan2
 from ..fem.beam import BLOCK_SIZE, ROOT_F, ROOT_M, U_
 from .spinning_blade import SpinningBlade
 
@@ -80,18 +79,17 @@ class AeroelasticBlade:
         beta = turbine.rotor.precone
         self.cos_cone = float(np.cos(beta))
         xg = self.beam.xg                                   # (N, G) span coordinate [m]
-        s = xg / L
-        self.chord = np.interp(s, aero.stations, aero.chord)[:, :, None]       # (N, G, 1)
-        self.tau = np.interp(s, aero.stations, aero.twist)[:, :, None]
-        self.polars = StationPolars(aero, s.ravel())
         # element section frames (pitch; a curved line's turn) in b: the unknowns are in
         # components of b turned by the elastic rotation, the airfoil lives in these frames
-        self.frames = np.ascontiguousarray(
-            self.beam.props.element_frames()[:, None, None, :, :])       # (N, 1, 1, 3, 3)
-        self.r = ((e + xg) * self.cos_cone)[:, :, None]      # distance from the shaft [m]
-        self.hub_radius = float(e)                          # root point on b1 [m]
-        self.hub_r = e * self.cos_cone
-        self.tip_r = (e + L) * self.cos_cone
+        self.strips = BladeStrips(aero, xg / L, self.beam.props.element_frames(), rho)
+        # the root point is at the hub radius e in the hub plane (rigid/kane.py); the coned
+        # blade axis b1 leaves it: distance from the shaft e + x cos(precone) [m]
+        self.r = (e + xg * self.cos_cone)[:, :, None]
+        self.hub_radius = float(e)
+        #: the root point relative to the shaft axis in the root frame b: e a1 (unconed)
+        self.root_lever = e * np.array([np.cos(beta), 0.0, -np.sin(beta)])
+        self.hub_r = float(e)
+        self.tip_r = e + L * self.cos_cone
         # shaft axis and direction of motion in the root frame b (precone about b2)
         self.axes = np.array([[np.sin(beta), 0.0, np.cos(beta)], [0.0, 1.0, 0.0]])
         N, G = xg.shape
@@ -103,7 +101,7 @@ class AeroelasticBlade:
         self.n = self.n_beam + self.n_ind * N * G
         self.differential = np.concatenate([self.beam.differential,
                                             np.full(self.n_ind * N * G, inflow == "oye")])
-        self.rotor_radius = self.tip_r / self.cos_cone
+        self.rotor_radius = float(e + L)
         self.set_inflow_time_constant(0.3)
         self._jac = ColouredJacobian(self._pattern())
 
@@ -150,35 +148,15 @@ class AeroelasticBlade:
         rows = {}
         U, Om = self.U, self.omega
 
-        A = self.frames
-
-        def to_section(x):      # turned-b components -> the section frame's (pitch, bend)
-            return np.einsum("ngbji,ngbj->ngbi", A, x)
-
-        def from_section(x):
-            return np.einsum("ngbij,ngbj->ngbi", A, x)
+        strips = self.strips
 
         def loads(sec):
-            s3 = to_section(sec["wind"][..., 0, :])                           # (N, G, B, 3)
-            tt = to_section(sec["wind"][..., 1, :])
-            V = to_section(sec["V"])
+            s3 = strips.to_section(sec["wind"][..., 0, :])                    # (N, G, B, 3)
+            tt = strips.to_section(sec["wind"][..., 1, :])
+            V = strips.to_section(sec["V"])
             air = U * (1.0 - a)[..., None] * s3 - (ap * Om * self.r)[..., None] * tt
             W = air - V
-            W2, W3 = W[..., 1], W[..., 2]
-            w2 = W2 * W2 + W3 * W3
-            q = 0.5 * self.rho * w2
-            w = np.sqrt(w2)
-            alpha = atan2(W3, -W2) + self.tau
-            cl, cd, cm = self.polars.coefficients(alpha.transpose(2, 0, 1).reshape(B, -1))
-            shape = alpha.shape
-            cl, cd, cm = (c.reshape(B, *shape[:2]).transpose(1, 2, 0) for c in (cl, cd, cm))
-            qc = q * self.chord
-            f2 = qc * (cl * W3 + cd * W2) / w
-            f3 = qc * (-cl * W2 + cd * W3) / w
-            force = np.zeros(W.shape, dtype=W.dtype)
-            force[..., 1], force[..., 2] = f2, f3
-            moment = np.zeros(W.shape, dtype=W.dtype)
-            moment[..., 0] = qc * self.chord * cm
+            force, moment, aero = strips.loads(W)
             # thrust (along s3) and driving force (along t) per unit blade length
             thrust = np.sum(force * s3, axis=-1)
             drive = np.sum(force * tt, axis=-1)
@@ -208,9 +186,8 @@ class AeroelasticBlade:
                     4 * (1 - a) * F * self.rho * U * Om * np.pi * r * r)
                 rows["qs"] = (a_qs, ap_qs)
             if details is not None:
-                details.update(alpha=alpha, a=a, ap=ap, F=F, thrust=thrust, drive=drive,
-                               w=w, cl=cl, cd=cd)
-            return from_section(force), from_section(moment)
+                details.update(a=a, ap=ap, F=F, thrust=thrust, drive=drive, **aero)
+            return strips.from_section(force), strips.from_section(moment)
 
         v = np.broadcast_to(self.blade.v, (B, 3))
         wv = np.broadcast_to(self.blade.w, (B, 3))
@@ -238,8 +215,15 @@ class AeroelasticBlade:
         moment about it and no component along it)."""
         F0, M0 = y[ROOT_F], y[ROOT_M]
         s3 = self.axes[0]
-        torque = np.dot(M0 + np.cross([self.hub_radius, 0.0, 0.0], F0), s3)
+        torque = np.dot(M0 + np.cross(self.root_lever, F0), s3)
         return float(torque), float(np.dot(F0, s3))
+
+    def inductions(self, y):
+        """(a, a') (N, G): the axial and tangential inductions at the Gauss points of the
+        state ``y``."""
+        N, G = self.beam.xg.shape
+        ind = y[self.n_beam:self.n_beam + 2 * N * G].reshape(2, N, G)
+        return ind[0].copy(), ind[1].copy()
 
     def tip_deflection(self, y):
         """(flap along b3, edge along b2) [m] of the tip in the root frame."""

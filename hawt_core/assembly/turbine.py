@@ -28,7 +28,9 @@ from ..fem.sections import mesh_beam
 from ..model import Turbine
 from ..numerics.jacobian import STEP, ColouredJacobian, block_tridiagonal_pattern
 from ..rigid import RigidSystem
+from ..aero.wind import Wind
 from .layout import StateLayout
+from .rotor_aero import FrozenWakeRotor
 
 __all__ = ["TurbineModel"]
 
@@ -40,10 +42,15 @@ class TurbineModel:
     """Rigid nacelle/hub (Kane) + flexible blades (mixed beam elements), one residual.
 
     ``elements`` overrides the blade's element count; ``rotor_speed`` the rotor speed.
+    ``wind`` (aero.wind.Wind): blade-element loads on the blades in that wind, frozen wake
+    (assembly/rotor_aero.py; the turbine needs its ``aerodynamics``), air density ``rho``
+    [kg/m^3], ``inductions`` (a, a') to freeze (default: the rotor's axisymmetric BEM
+    steady state); None: in a vacuum (the paper's model).
     """
 
     def __init__(self, turbine: Turbine, elements: Optional[int] = None,
-                 rotor_speed: Optional[float] = None):
+                 rotor_speed: Optional[float] = None, wind: Optional[Wind] = None,
+                 rho: float = 1.225, inductions: Optional[tuple] = None):
         if rotor_speed is not None:
             turbine = turbine.with_rotor_speed(rotor_speed)
         if elements is not None:
@@ -58,6 +65,10 @@ class TurbineModel:
         #: the flexible tower's beam (None: rigid tower)
         self.tower = BeamElements(mesh_beam(turbine.tower)) if turbine.tower is not None else None
         self.layout = StateLayout(self.rigid, self.n_blades, self.beam, self.tower)
+        #: the blades' aerodynamics (None: in a vacuum)
+        self.wind, self.rho = wind, float(rho)
+        self.aero = (FrozenWakeRotor(turbine, wind, self.rotor_speed, self.beam, rho,
+                                     inductions) if wind is not None else None)
         self.n = self.layout.n
         self.differential = np.concatenate(
             [np.ones(self.nq + self.nu, bool), np.tile(self.beam.differential, self.n_blades)]
@@ -81,6 +92,12 @@ class TurbineModel:
         self._reference_jac = None  # built on first use by jacobians_reference (tests only)
         self._beam_jac = ColouredJacobian(block_tridiagonal_pattern(self.beam.pattern_blocks()))
 
+    def with_turbine(self, turbine: Turbine) -> "TurbineModel":
+        """The model of ``turbine`` (the same mesh and rotor speed are the caller's to keep)
+        in this model's wind, with this model's frozen inductions."""
+        return TurbineModel(turbine, wind=self.wind, rho=self.rho,
+                            inductions=None if self.aero is None else self.aero.inductions)
+
     def dynamic_dimension(self) -> int:
         """Number of dynamic states (finite eigenvalues of the linearized descriptor system):
         two per rigid coordinate and per flexible section direction of every beam element;
@@ -95,6 +112,23 @@ class TurbineModel:
             return None
         return np.stack([y[self._tip_theta], y[self._tip_V], y[self._tip_Om],
                          ydot[self._tip_V], ydot[self._tip_Om]])
+
+    def _air(self, q, t, tower=None):
+        """The blades' root-frame wind vectors (..., Nb, 3, 3) at the rigid coordinates q
+        (..., nq), times t (...) and tower-top state (FrozenWakeRotor.root_vectors); None in
+        a vacuum."""
+        if self.aero is None:
+            return None
+        fr = self.rigid.frames(q, t, tower)
+        return self.aero.root_vectors(fr["B"], fr["S"])
+
+    def _blade_residual(self, ydb, yb, v, w, g, air):
+        """Beam rows (K, nbl) of K blades at root motions v, w (K, 3), gravity g (K, 3) or
+        None and root-frame wind vectors ``air`` (K, 3, 3) or None (in a vacuum)."""
+        if air is None:
+            return self.beam.residual(ydb, yb, v, w, g)
+        return self.beam.residual(ydb, yb, v, w, g, wind=air,
+                                  section_loads=self.aero.section_loads)
 
     def _tower_residual(self, ydt, yt, tip_loads, batch=1):
         """Tower beam rows (batch, n_t): clamped at the ground (root frame inertial, at rest),
@@ -130,8 +164,10 @@ class TurbineModel:
         yb = y[:, nr:].reshape(K, nb, nbl)
         v, w = self.rigid.root_motion(q, u, t)                            # (K, nb, 3)
         g = self.rigid.gravity_in_root(q, t).reshape(K * nb, 3) if self.gravity else None
-        rb = self.beam.residual(ydot[:, nr:].reshape(K * nb, nbl), yb.reshape(K * nb, nbl),
-                                v.reshape(K * nb, 3), w.reshape(K * nb, 3), g)
+        air = self._air(q, t)
+        rb = self._blade_residual(ydot[:, nr:].reshape(K * nb, nbl), yb.reshape(K * nb, nbl),
+                                  v.reshape(K * nb, 3), w.reshape(K * nb, 3), g,
+                                  None if air is None else air.reshape(K * nb, 3, 3))
         out = np.empty((K, self.n), dtype=rb.dtype)
         out[:, :nq] = self.rigid.kinematics(q, qd, u, t)
         out[:, nq:nr] = self.rigid.dynamics(q, u, ud, t, yb[:, :, 0:3], yb[:, :, 3:6])
@@ -148,7 +184,7 @@ class TurbineModel:
         tw = self.tower_top(ydot, y)
         v, w = self.rigid.root_motion(q, u, t, tw)
         g = self.rigid.gravity_in_root(q, t, tw) if self.gravity else None
-        rb = self.beam.residual(ydb, yb, v, w, g)
+        rb = self._blade_residual(ydb, yb, v, w, g, self._air(q, t, tw))
         rk = self.rigid.kinematics(q, qd, u, t)
         gf = self.rigid.generalized_forces(q, u, ud, t, yb[:, 0:3], yb[:, 3:6], tw)
         rt = self._tower_residual(ydot[None, to:], y[None, to:], gf[None, nu:])
@@ -195,8 +231,8 @@ class TurbineModel:
         g = self.rigid.gravity_in_root(q, t) if self.gravity else None
         rows_y, cols_y, vals_y = [], [], []
         rows_d, cols_d, vals_d = [], [], []
-        self._blade_block_jacobians(v, w, g, yb, ydb, (rows_y, cols_y, vals_y),
-                                    (rows_d, cols_d, vals_d))
+        self._blade_block_jacobians(v, w, g, self._air(q, t), yb, ydb,
+                                    (rows_y, cols_y, vals_y), (rows_d, cols_d, vals_d))
         if nr:          # the rigid columns and the rigid rows (they vary with the azimuth)
             c = self.coupling_jacobians(ydot, y, t)
             rc, kc = c["rigid"], c["root_loads"]
@@ -229,13 +265,13 @@ class TurbineModel:
                 rr.append(jac._rows + offsets[k]), cc.append(jac._cols + offsets[k])
                 vv.append(comp[jac._col_colour, k, jac._rows])
 
-    def _blade_block_jacobians(self, v, w, g, yb, ydb, Jy_parts, Jd_parts):
-        """Blade rows w.r.t. their own unknowns at the root motion (v, w) and gravity g
-        (Nb, 3) (see _block_jacobians)."""
-        rep = lambda a, C: None if a is None else np.tile(a, (C, 1))    # (C*nb, 3)
+    def _blade_block_jacobians(self, v, w, g, air, yb, ydb, Jy_parts, Jd_parts):
+        """Blade rows w.r.t. their own unknowns at the root motion (v, w), gravity g (Nb, 3)
+        and root-frame wind vectors ``air`` (Nb, 3, 3) (see _block_jacobians)."""
+        rep = lambda a, C: None if a is None else np.tile(a, (C,) + (1,) * (a.ndim - 1))
         self._block_jacobians(
-            self._beam_jac, lambda Yd, Y, C: self.beam.residual(Yd, Y, rep(v, C), rep(w, C),
-                                                                 rep(g, C)),
+            self._beam_jac, lambda Yd, Y, C: self._blade_residual(Yd, Y, rep(v, C), rep(w, C),
+                                                                   rep(g, C), rep(air, C)),
             yb, ydb, [self.layout.blade_offset(k) for k in range(self.n_blades)],
             Jy_parts, Jd_parts)
 
@@ -259,7 +295,7 @@ class TurbineModel:
         rows_y, cols_y, vals_y = [], [], []
         rows_d, cols_d, vals_d = [], [], []
         Jy_parts, Jd_parts = (rows_y, cols_y, vals_y), (rows_d, cols_d, vals_d)
-        self._blade_block_jacobians(v, w, g, yb, ydb, Jy_parts, Jd_parts)
+        self._blade_block_jacobians(v, w, g, self._air(q, t, tw), yb, ydb, Jy_parts, Jd_parts)
         gf = self.rigid.generalized_forces(q, u, ud, t, yb[:, 0:3], yb[:, 3:6], tw)
         tip = gf[nu:]
         self._block_jacobians(self._tower_jac,
@@ -270,7 +306,7 @@ class TurbineModel:
         tip_cols = np.concatenate([self._tip_theta, self._tip_V, self._tip_Om])
         xcols = np.concatenate([np.arange(nr), tip_cols])
         x0 = np.concatenate([q, u, tw[0], tw[1], tw[2]])
-        vs, ws, gs = [], [], []
+        vs, ws, gs, airs = [], [], [], []
         for j in range(len(xcols)):
             x = x0.astype(complex)
             x[j] += 1j * h
@@ -278,10 +314,13 @@ class TurbineModel:
             vj, wj = self.rigid.root_motion(x[:nq], x[nq:nr], t, twj)
             vs.append(vj), ws.append(wj)
             gs.append(self.rigid.gravity_in_root(x[:nq], t, twj) if self.gravity else None)
+            airs.append(self._air(x[:nq], t, twj))
         nx = len(xcols)
-        r = self.beam.residual(np.tile(ydb, (nx, 1)), np.tile(yb, (nx, 1)).astype(complex),
-                               np.concatenate(vs), np.concatenate(ws),
-                               np.concatenate(gs) if self.gravity else None).imag / h
+        r = self._blade_residual(np.tile(ydb, (nx, 1)), np.tile(yb, (nx, 1)).astype(complex),
+                                 np.concatenate(vs), np.concatenate(ws),
+                                 np.concatenate(gs) if self.gravity else None,
+                                 np.concatenate(airs) if self.aero is not None else None
+                                 ).imag / h
         r = r.reshape(nx, nb * nbl)
         rr, cc = np.nonzero(r.T)
         rows_y.append(nr + rr), cols_y.append(xcols[cc]), vals_y.append(r.T[rr, cc])
@@ -344,9 +383,12 @@ class TurbineModel:
         v, w = self.rigid.root_motion(x[:, :nq], x[:, nq:], tt)
         g = self.rigid.gravity_in_root(x[:, :nq], tt).reshape(M * nr * nb, 3) \
             if self.gravity else None
-        rb = self.beam.residual(np.tile(ydb, (M * nr, 1)),
-                                np.tile(yb, (M * nr, 1)).astype(complex),
-                                v.reshape(M * nr * nb, 3), w.reshape(M * nr * nb, 3), g).imag / h
+        air = self._air(x[:, :nq], tt)
+        rb = self._blade_residual(np.tile(ydb, (M * nr, 1)),
+                                  np.tile(yb, (M * nr, 1)).astype(complex),
+                                  v.reshape(M * nr * nb, 3), w.reshape(M * nr * nb, 3), g,
+                                  None if air is None else air.reshape(M * nr * nb, 3, 3)
+                                  ).imag / h
         y_cols = np.zeros((M, self.n, nr))
         y_cols[:, nr:] = rb.reshape(M, nr, nb * nbl).transpose(0, 2, 1)
         ydot_cols = np.zeros((M, self.n, nr))
@@ -395,8 +437,27 @@ class TurbineModel:
         v, w = self.rigid.root_motion(q, u, 0.0)
         for k in range(self.n_blades):
             off = self.layout.blade_offset(k)
-            y[off:off + self.beam.n] = self.beam.rigid_body_state(np.real(v[k]), np.real(w[k]))
+            # in wind: the blade's own aeroelastic steady state on the spinning hub
+            y[off:off + self.beam.n] = (
+                self.aero.blade_state if self.aero is not None and self.aero.blade_state
+                is not None else self.beam.rigid_body_state(np.real(v[k]), np.real(w[k])))
         return y  # a flexible tower starts at rest, undeformed (zeros)
+
+    def load_scale(self) -> float:
+        """The scale [N] of the loads a steady state balances: the largest residual (at
+        least 1) of the blades turning undeformed with the hub, rigid coordinates zero, at
+        t = 0 (centrifugal, gravity and aerodynamic loads against unloaded sections); the
+        steady-state solvers' tolerances are relative to it."""
+        if getattr(self, "_load_scale", None) is None:
+            y = np.zeros(self.n)
+            v, w = self.rigid.root_motion(np.zeros(self.nq), np.zeros(self.nu), 0.0)
+            for k in range(self.n_blades):
+                off = self.layout.blade_offset(k)
+                y[off:off + self.beam.n] = self.beam.rigid_body_state(np.real(v[k]),
+                                                                      np.real(w[k]))
+            self._load_scale = max(1.0, float(np.abs(self.residual(np.zeros(self.n), y,
+                                                                   0.0)).max()))
+        return self._load_scale
 
     def display_rows(self):
         """Indices and weights of displacement-like unknowns (units: metres of motion): rigid

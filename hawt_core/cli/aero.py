@@ -168,6 +168,101 @@ def _flutter_args(p):
                    help="write frequency and damping against speed to this PNG file")
 
 
+def _schedule_defaults(s: dict) -> dict:
+    """What a schedule without these entries assumes: no minimum speed, a lossless
+    generator, fine pitch 0, pitch up to 90 deg."""
+    import math
+    s.setdefault("min_speed", 0.0)
+    s.setdefault("efficiency", 1.0)
+    s.setdefault("fine_pitch", 0.0)
+    s.setdefault("max_pitch", math.radians(90.0))
+    return s
+
+
+def controller_schedule(args):
+    """(path, schedule) of --controller or the shipped turbine's DISCON.IN, or (None, None)."""
+    from ..io.catalog import shipped_controller
+    from ..io.discon import discon_schedule
+    path = args.controller if args.controller is not None else shipped_controller(args.turbine)
+    if path is None:
+        return None, None
+    return path, _schedule_defaults(discon_schedule(path))
+
+
+def turbine_in_wind(args, turbine):
+    """(turbine at its operating point, Wind, settings) for ``--wind U``: the rotor speed
+    and pitch given (--rotor-speed, --pitch), else those of the controller's schedule at U
+    (--controller, or the shipped turbine's DISCON.IN: the operating point of
+    ``hawt operating-points``), else the turbine file's."""
+    import math
+    from dataclasses import replace
+    from ..aero.wind import Wind
+    from ..analyses.operating_points import operating_points
+    U = float(args.wind)
+    wind = Wind(U, direction=math.radians(args.wind_direction))
+    speed = args.rotor_speed
+    pitch = None if args.pitch is None else math.radians(args.pitch)
+    source = "given"
+    if speed is None or pitch is None:
+        path, schedule = controller_schedule(args)
+        if path is not None:
+            point = operating_points(turbine, [U], schedule).points[0]
+            if not point["converged"]:
+                raise ValueError(f"--wind: no operating point at {U:g} m/s under the schedule "
+                                 f"of {path}: {point.get('error')}")
+            speed = point["rotor_speed_rpm"] * math.pi / 30 if speed is None else speed
+            pitch = math.radians(point["pitch_deg"]) if pitch is None else pitch
+            source = f"the schedule of {path} (hawt operating-points)"
+        else:
+            speed = turbine.rotor.speed if speed is None else speed
+            pitch = -turbine.rotor.pitch if pitch is None else pitch
+            source = "the turbine file's rotor speed and pitch"
+    if not speed > 0:
+        raise ValueError(f"--rotor-speed: {speed!r} is not allowed in wind; need a rotor speed "
+                         "> 0 [rad/s]")
+    turbine = replace(turbine, rotor=replace(turbine.rotor, speed=float(speed),
+                                             pitch=-float(pitch)))
+    return turbine, wind, {"rotor_speed_rpm": speed * 30 / math.pi,
+                           "pitch_deg": math.degrees(pitch), "source": source}
+
+
+def wind_args(p):
+    """``--wind U`` and what goes with it (modes, campbell at one wind speed)."""
+    p.add_argument("--wind", type=finite_float("--wind", unit="m/s"), default=None,
+                   metavar="U", help="analyse in a steady uniform wind of U m/s: blade-element "
+                   "momentum loads with the wake frozen at the operating point (rotor speed "
+                   "and pitch from --rotor-speed/--pitch, else the controller's schedule, "
+                   "else the turbine file)")
+    p.add_argument("--wind-direction", type=finite_float("--wind-direction", unit="deg"),
+                   default=0.0, metavar="DEG",
+                   help="the wind's direction about the yaw axis (yaw misalignment) [deg]")
+    p.add_argument("--pitch", type=finite_float("--pitch", unit="deg"), default=None,
+                   metavar="DEG", help="collective pitch [deg], positive towards feather "
+                                       "(ElastoDyn's BlPitch)")
+    p.add_argument("--controller", default=None, metavar="DISCON.IN",
+                   help="ROSCO controller file whose schedule sets the rotor speed and pitch "
+                        "at --wind (default for nrel5mw and iea15mw: the rosco wheel's)")
+
+
+def check_wind_args(args):
+    """The --wind options' ranges (ValueError naming the flag)."""
+    if args.wind is None:
+        for flag, v in (("--wind-direction", args.wind_direction != 0.0),
+                        ("--pitch", args.pitch is not None),
+                        ("--controller", args.controller is not None)):
+            if v:
+                raise ValueError(f"{flag}: only used with --wind U")
+        return
+    if not 0.1 <= args.wind <= 100.0:
+        raise ValueError(f"--wind: {args.wind!r} is not allowed; need a number from 0.1 to "
+                         "100 [m/s]")
+    if not abs(args.wind_direction) < 90.0:
+        raise ValueError(f"--wind-direction: {args.wind_direction!r} is not allowed; need "
+                         "-90 < DEG < 90 (the rotor faces the wind)")
+    if args.pitch is not None and not -90.0 <= args.pitch <= 90.0:
+        raise ValueError(f"--pitch: {args.pitch!r} is not allowed; need -90 to 90 [deg]")
+
+
 def schedule_from_args(args) -> dict:
     """The operating-point schedule: --controller FILE, the shipped turbine's DISCON.IN from
     the rosco wheel, or the values given; each given value overrides the file's."""
@@ -178,6 +273,7 @@ def schedule_from_args(args) -> dict:
     if path is None:
         path = shipped_controller(args.turbine)
     s = discon_schedule(path) if path is not None else {}
+    _schedule_defaults(s)
     given = {"rated_power": None if args.rated_power is None else 1e3 * args.rated_power,
              "rated_speed": None if args.rated_rpm is None else args.rated_rpm * math.pi / 30,
              "min_speed": None if args.min_rpm is None else args.min_rpm * math.pi / 30,
@@ -185,10 +281,6 @@ def schedule_from_args(args) -> dict:
              "efficiency": None if args.efficiency is None else args.efficiency / 100,
              "fine_pitch": None if args.fine_pitch is None else math.radians(args.fine_pitch)}
     s.update({k: v for k, v in given.items() if v is not None})
-    s.setdefault("min_speed", 0.0)
-    s.setdefault("efficiency", 1.0)
-    s.setdefault("fine_pitch", 0.0)
-    s.setdefault("max_pitch", math.radians(90.0))
     missing = [k for k in ("rated_power", "rated_speed", "tsr") if k not in s]
     if missing:
         flags = {"rated_power": "--rated-power", "rated_speed": "--rated-rpm",

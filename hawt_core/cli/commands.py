@@ -51,16 +51,23 @@ def _blade_modes_args(p):
                      "JSON with --json.")
 def cmd_modes(args) -> int:
     from ..analyses.modal import modal_analysis
+    from .aero import check_wind_args, turbine_in_wind
+    check_wind_args(args)
     turbine = load(args.turbine)
+    wind, point = None, None
+    if args.wind is not None:
+        turbine, wind, point = turbine_in_wind(args, turbine)
     status = ProgressLine(not args.json)
     try:
         result = with_accuracy(args, turbine, lambda t, n: modal_analysis(
-            t, elements=n, rotor_speed=args.rotor_speed, steps=args.steps,
-            method=args.method, max_per_rev=args.max_per_rev, progress=status),
-            progress=lambda msg: status(0.0, msg))
+            t, elements=n, rotor_speed=None if wind is not None else args.rotor_speed,
+            steps=args.steps, method=args.method, max_per_rev=args.max_per_rev,
+            progress=status, wind=wind), progress=lambda msg: status(0.0, msg))
     finally:
         status.close()
     result.settings["turbine_file"] = args.turbine
+    if point is not None:
+        result.settings["operating_point"] = point
     written = []
     if args.plots:
         import os
@@ -77,8 +84,10 @@ def cmd_modes(args) -> int:
 
 @cmd_modes.arguments
 def _modes_args(p):
+    from .aero import wind_args
     model_args(p)
     marching_args(p)
+    wind_args(p)
     p.add_argument("--max-per-rev", type=per_rev, default=None, metavar="F",
                    help="band of Hill's method and multi-blade coordinates: modes below F "
                         "per-rev (default 50); with --rotor-speed 0 (a standing rotor) F is "
@@ -88,24 +97,47 @@ def _modes_args(p):
                    help="write mode-shape pictures (PNG) into this folder")
 
 
-@command("campbell", help="Campbell diagram: Floquet modes over a range of rotor speeds",
+@command("campbell", help="Campbell diagram: Floquet modes over rotor speeds or wind speeds",
          description="Floquet modal analysis (as `hawt modes`) at COUNT rotor speeds from START "
                      "to STOP rad/s, run in parallel worker processes, modes tracked from speed "
                      "to speed by MAC (Hungarian assignment). Prints the frequency table; "
                      "--plot writes the diagram (Hz vs rpm with 1P..nP rays, damping), --csv "
-                     "the data.")
+                     "the data. With --wind instead of --speeds: the aeroelastic diagram "
+                     "against wind speed at the controller schedule's operating points.")
 def cmd_campbell(args) -> int:
     import concurrent.futures as cf
+    import math
     import os
-    from ..analyses.campbell import campbell
+    from ..analyses.campbell import campbell, campbell_in_wind
+    from .aero import controller_schedule
+    if (args.speeds is None) == (args.wind is None):
+        raise ValueError("campbell: give either --speeds START:STOP:COUNT (rotor speeds, in a "
+                         "vacuum) or --wind START:STOP:COUNT (wind speeds, at the operating "
+                         "points)")
+    if args.wind is None and (args.controller is not None or args.wind_direction):
+        raise ValueError("--controller, --wind-direction: only used with --wind")
+    if not abs(args.wind_direction) < 90.0:
+        raise ValueError(f"--wind-direction: {args.wind_direction!r} is not allowed; need "
+                         "-90 < DEG < 90 (the rotor faces the wind)")
     turbine = load(args.turbine)
+    schedule = None
+    if args.wind is not None:
+        path, schedule = controller_schedule(args)
+        if schedule is None:
+            raise ValueError("--wind: no controller file for this turbine; give --controller "
+                             "DISCON.IN (its schedule sets the rotor speed and pitch)")
     status = ProgressLine(True)
     workers = args.workers or os.cpu_count() or 1
+    common = dict(elements=args.elements, steps=args.steps, method=args.method,
+                  progress=status, frame=args.frame, max_hz=args.max_hz)
     with cf.ProcessPoolExecutor(max_workers=workers) as pool:
         try:
-            result = campbell(turbine, args.speeds, elements=args.elements, steps=args.steps,
-                              method=args.method, executor=pool, progress=status,
-                              frame=args.frame, max_hz=args.max_hz)
+            if schedule is not None:
+                result = campbell_in_wind(turbine, args.wind, schedule, executor=pool,
+                                          direction=math.radians(args.wind_direction),
+                                          **common)
+            else:
+                result = campbell(turbine, args.speeds, executor=pool, **common)
         finally:
             status.close()
     result.settings["workers"] = workers
@@ -126,9 +158,20 @@ def _campbell_args(p):
     import re
     p._negative_number_matcher = re.compile(r"^-\d+$|^-\d*\.\d+$|^-[\d.eE+-]*:")
     turbine_arg(p)
-    p.add_argument("--speeds", type=speeds_type, required=True, metavar="START:STOP:COUNT",
+    from .aero import grid_type
+    p.add_argument("--speeds", type=speeds_type, default=None, metavar="START:STOP:COUNT",
                    help="rotor speeds [rad/s]: COUNT (>= 2) evenly spaced from START (> 0) to "
-                        "STOP")
+                        "STOP (in a vacuum)")
+    p.add_argument("--wind", type=grid_type("--wind", 0.1, 100.0, "m/s"), default=None,
+                   metavar="START:STOP:COUNT",
+                   help="wind speeds [m/s] instead: the aeroelastic diagram (frozen-wake BEM) "
+                        "at the operating points of the controller's schedule, frequency and "
+                        "damping against wind speed")
+    p.add_argument("--controller", default=None, metavar="DISCON.IN",
+                   help="with --wind: ROSCO controller file with the schedule (default for "
+                        "nrel5mw and iea15mw: the rosco wheel's)")
+    p.add_argument("--wind-direction", type=finite_float("--wind-direction", unit="deg"),
+                   default=0.0, metavar="DEG", help="with --wind: yaw misalignment [deg]")
     elements_arg(p)
     marching_args(p)
     p.add_argument("--workers", type=positive_int, default=None, metavar="W",

@@ -86,6 +86,15 @@ class CampbellResult:
     settings: dict = field(default_factory=dict)
     compute_time: float = 0.0
     frame: str = "rotating"
+    #: a sweep in wind (analyses/campbell.campbell_in_wind): the wind speed [m/s] of every
+    #: point (``speeds`` are then the operating points' rotor speeds); None: a rotor-speed sweep
+    wind_speeds: Optional[np.ndarray] = None
+
+    @property
+    def columns(self) -> tuple:
+        """The CSV columns (CSV_COLUMNS, and the wind speed and pitch of a sweep in wind)."""
+        return CSV_COLUMNS + (("wind_speed_m_s", "pitch_deg") if self.wind_speeds is not None
+                              else ())
 
     @property
     def failed(self) -> list:
@@ -125,12 +134,15 @@ class CampbellResult:
                             "fixed_frame_damping_ratio":
                                 float(t.fixed_frame_damping_ratio[i]) if fixed else nan,
                             "whirl": t.whirl or "", "frame": self.frame})
+                if self.wind_speeds is not None:
+                    out[-1]["wind_speed_m_s"] = float(self.wind_speeds[i])
+                    out[-1]["pitch_deg"] = float(self.settings["pitch_deg"][i])
         return out
 
     def to_csv(self, path) -> str:
         """Write the CSV (header + one row per speed and track); returns the path."""
         with open(path, "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=list(CSV_COLUMNS))
+            w = csv.DictWriter(f, fieldnames=list(self.columns))
             w.writeheader()
             for r in self.rows():
                 w.writerow({k: (f"{v:.12g}" if isinstance(v, float) else v) for k, v in r.items()})
@@ -150,13 +162,23 @@ class CampbellResult:
         lines = [f"Campbell diagram of '{self.settings.get('turbine', '')}': "
                  f"{len(self.speeds)} speeds, {self.settings.get('elements')} elements, "
                  f"{self.settings.get('method')}; {self.frame}-frame frequencies [Hz]"]
-        head = f"{'rad/s':>8}{'rpm':>8} " + "".join(f"{t.label[:14]:>15}" for t in self.tracks)
+        wind = self.wind_speeds is not None
+        head = (f"{'m/s':>7}" if wind else "") + f"{'rad/s':>8}{'rpm':>8} " + \
+            "".join(f"{t.label[:14]:>15}" for t in self.tracks)
         lines.append(head)
         curves = [t.hz(self.frame) for t in self.tracks]
         for i, (w, n) in enumerate(zip(self.speeds, self.rpm)):
             vals = "".join(f"{c[i]:>15.4f}" if np.isfinite(c[i]) else f"{'-':>15}"
                            for c in curves)
-            lines.append(f"{w:>8.3f}{n:>8.2f} {vals}")
+            lines.append((f"{self.wind_speeds[i]:>7.2f}" if wind else "")
+                         + f"{w:>8.3f}{n:>8.2f} {vals}")
+        if wind:
+            lines.append("damping ratios [-]")
+            lines.append(head)
+            for i, (w, n) in enumerate(zip(self.speeds, self.rpm)):
+                vals = "".join(f"{d[i]:>15.4f}" if np.isfinite(d[i]) else f"{'-':>15}"
+                               for d in (t.damping(self.frame) for t in self.tracks))
+                lines.append(f"{self.wind_speeds[i]:>7.2f}{w:>8.3f}{n:>8.2f} {vals}")
         for w, msg in self.failed:
             lines.append(f"analysis failed at {w:.4g} rad/s: {msg}")
         warned = [f"{p['speed']:.4g}" for p in self.points if p.get("warnings")]

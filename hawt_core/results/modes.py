@@ -22,7 +22,7 @@ __all__ = ['Mode', 'ModalResult', 'BladeMode', 'BladeModesResult', 'mode_shape']
 
 #: Footer of a result whose turbine has aerodynamics the analysis does not use (yet).
 VACUUM_NOTE = ("in a vacuum: the turbine's aerodynamics (blade and airfoil polars) are kept "
-               "in the model but not used by this structural analysis")
+               "in the model but not used by this structural analysis (--wind U: in wind)")
 
 
 @dataclass
@@ -127,6 +127,9 @@ class ModalResult:
         kind = "Modes" if self.standstill else "Dominant frequencies"
         header = (f"{kind} of the turbine '{s['turbine']}' ({'' if self.standstill else 'Floquet, '}{how}), "
                   f"{s['elements']} elements per blade, rotor speed {s['rotor_speed']:.4g} rad/s")
+        if s.get("wind_speed") is not None:
+            header += (f", in wind {s['wind_speed']:.4g} m/s (pitch {s['pitch_deg']:.3g} deg; "
+                       f"{s['aerodynamics']})")
         footer = []
         if self.unresolved:
             if s["method"] in ("radau", "paper"):

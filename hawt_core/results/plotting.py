@@ -424,10 +424,15 @@ def plot_campbell(result, path, max_hz=None, max_rays: int = 12, tracks="table2"
     The curves are the tracks' continuous frequencies (the dominant frequency plus the integer
     per-rev that keeps a track continuous; such points are circled), each labelled at its
     right end (labels pushed apart so that none overlaps); the two members of a real pair
-    (Track.twin) are drawn once, their dampings both.  PNG."""
+    (Track.twin) are drawn once, their dampings both.  A sweep in wind (result.wind_speeds)
+    is drawn against the wind speed, the nP lines following the operating points' rotor
+    speeds.  PNG."""
     any_shift = False
     plt = _pyplot()
     rpm = np.asarray(result.rpm, float)
+    wind = getattr(result, "wind_speeds", None)
+    # the abscissa: rotor speed [rpm], or the wind speed [m/s] of a sweep in wind
+    xs = rpm if wind is None else np.asarray(wind, float)
     if tracks == "all":
         tracks = list(result.tracks)
     elif tracks == "table2":
@@ -444,14 +449,23 @@ def plot_campbell(result, path, max_hz=None, max_rays: int = 12, tracks="table2"
     top = float(max_hz) if max_hz else 1.05 * fmax
     fig, (ax, axd) = plt.subplots(2, 1, figsize=(10, 9), sharex=True,
                                   gridspec_kw={"height_ratios": [3, 1.2]})
-    x = np.array([0.0, rpm.max() * 1.02 if len(rpm) else 1.0])
-    nmax = min(max_rays, max(1, int(math.ceil(top * 60.0 / max(x[1], 1e-12)))))
+    if wind is None:
+        x = np.array([0.0, rpm.max() * 1.02 if len(rpm) else 1.0])
+    else:
+        x = np.array([xs.min(), xs.max() + 0.02 * max(np.ptp(xs), 1.0)])
+    nmax = min(max_rays, max(1, int(math.ceil(top * 60.0 / max(rpm.max(), 1e-12)))))
     for n in range(1, nmax + 1):
-        ax.plot(x, n * x / 60.0, color="0.85", lw=0.8, zorder=0)
-        # the label inside the panel where the ray leaves it (top or right edge)
-        xe = min(x[1], top * 60.0 / n)
-        ax.text(xe, min(n * xe / 60.0, top), f"{n}P ", color="0.55", fontsize=6,
-                va="top" if xe < x[1] else "bottom", ha="right", zorder=0)
+        if wind is None:
+            ax.plot(x, n * x / 60.0, color="0.85", lw=0.8, zorder=0)
+            # the label inside the panel where the ray leaves it (top or right edge)
+            xe = min(x[1], top * 60.0 / n)
+            ax.text(xe, min(n * xe / 60.0, top), f"{n}P ", color="0.55", fontsize=6,
+                    va="top" if xe < x[1] else "bottom", ha="right", zorder=0)
+        else:
+            ax.plot(xs, n * rpm / 60.0, color="0.85", lw=0.8, zorder=0)
+            if n * rpm[-1] / 60.0 <= top:
+                ax.text(xs[-1], n * rpm[-1] / 60.0, f"{n}P ", color="0.55", fontsize=6,
+                        va="bottom", ha="right", zorder=0)
     styles = {"symmetric": "-", "collective": "-", "antisymmetric": "--", "cyclic": "--",
               "backward-whirl": "--", "forward-whirl": ":", "differential": "-."}
     markers = {"flap": "o", "lag": "s", "torsion": "^", "teeter": "D", "yaw": "v",
@@ -466,14 +480,14 @@ def plot_campbell(result, path, max_hz=None, max_rays: int = 12, tracks="table2"
                                                                   (t.symmetry or "") else ""),
                         "-")
         mk = markers.get(t.family, ".")
-        axd.plot(rpm, t.damping(frame), ls=ls, marker=mk, ms=3, color=col)
+        axd.plot(xs, t.damping(frame), ls=ls, marker=mk, ms=3, color=col)
         if not ok.any() or np.nanmin(c) > top or t.twin in drawn:
             continue
         drawn.add(t.label)
-        ax.plot(rpm, c, ls=ls, marker=mk, ms=3, color=col)
+        ax.plot(xs, c, ls=ls, marker=mk, ms=3, color=col)
         shifted = np.nan_to_num(t.shift) != 0
         if shifted.any():
-            ax.plot(rpm[shifted], c[shifted], ls="none", marker="o", ms=8, mfc="none", mec=col)
+            ax.plot(xs[shifted], c[shifted], ls="none", marker="o", ms=8, mfc="none", mec=col)
             any_shift = True
         j = np.flatnonzero(ok)[-1]
         if c[j] <= top:
@@ -483,13 +497,13 @@ def plot_campbell(result, path, max_hz=None, max_rays: int = 12, tracks="table2"
         ys = _spread(np.array([e[0] for e in ends]), gap, 0.0, top)
         xl = x[1]
         for (y0, lab, col), y in zip(ends, ys):
-            ax.annotate(lab, xy=(rpm.max(), y0), xytext=(xl + 0.02 * (xl - rpm.min()), y),
+            ax.annotate(lab, xy=(xs.max(), y0), xytext=(xl + 0.02 * (xl - xs.min()), y),
                         fontsize=7, color=col, va="center", ha="left",
                         arrowprops=dict(arrowstyle="-", color=col, lw=0.5, alpha=0.6),
                         annotation_clip=False)
     ax.set_ylim(0.0, top)
-    lo = rpm.min() if len(rpm) else 0.0
-    span = (rpm.max() - lo) if len(rpm) else 1.0
+    lo = xs.min() if len(xs) else 0.0
+    span = (xs.max() - lo) if len(xs) else 1.0
     ax.set_xlim(max(0.0, lo - 0.05 * max(span, 1e-9 + lo * 0.1)), x[1])
     if any_shift:
         ax.text(0.01, 0.99, "circled: dominant harmonic moved by whole per-rev for continuity",
@@ -500,11 +514,13 @@ def plot_campbell(result, path, max_hz=None, max_rays: int = 12, tracks="table2"
     how = ((f"{st.get('method')} {rng[0]}" + (f"-{rng[1]}" if rng[1] != rng[0] else "")
             + " steps/period") if st.get("method") in ("radau", "paper")
            else f"{st.get('method')}")
-    ax.set_title(f"Campbell diagram: {st.get('turbine', '')}\n"
+    ax.set_title(f"Campbell diagram: {st.get('turbine', '')}"
+                 + (" in wind (frozen-wake BEM)" if wind is not None else "") + "\n"
                  f"{st.get('elements')} elements, {how}, {frame} frame", fontsize=10)
     ax.grid(True, alpha=0.3)
     axd.axhline(0.0, color="0.5", lw=0.8)
-    axd.set_xlabel("rotor speed [rpm]")
+    axd.set_xlabel("rotor speed [rpm]" if wind is None else
+                   "wind speed [m/s] (rotor speed and pitch: the operating points)")
     axd.set_ylabel("damping ratio")
     axd.grid(True, alpha=0.3)
     fig.tight_layout()

@@ -96,7 +96,7 @@ def periodic_steady_state(model, harmonics: int = 8, tol: float = 1e-9, max_iter
     except (ValueError, ConvergenceError):
         pass  # genuinely periodic (or no constant state found): harmonic balance
     T = model.period
-    scale = max(1.0, np.abs(model.residual(np.zeros(model.n), model.initial_guess(), 0.0)).max())
+    scale = model.load_scale()
     guess = None
     H = int(harmonics)
     try:
@@ -143,13 +143,12 @@ def _continuation(model, harmonics, tol, max_iter, progress, first_error):
     (homotopy_turbine at CONTINUATION_START) to the turbine itself, each solution the next
     one's starting guess; the step (a factor on lam) grows after a success and shrinks after
     a failure.  Raises ConvergenceError saying where the continuation stalled."""
-    from ..assembly import TurbineModel
     T0 = model.turbine
     if not (T0.gravity.enabled or T0.nacelle.yaw_free):
         raise first_error
     lam, step, guess, last = CONTINUATION_START, 10.0, None, None
     while True:
-        m = TurbineModel(homotopy_turbine(T0, lam)) if lam < 1 else model
+        m = model.with_turbine(homotopy_turbine(T0, lam)) if lam < 1 else model
         if progress is not None:
             progress(0.5, f"periodic steady state: continuation at {lam:.3g}")
         try:
@@ -220,6 +219,10 @@ def _harmonic_balance(model, harmonics, tol, max_iter, progress, guess) -> Perio
     n = model.n
     Y = np.tile(model.initial_guess(), (M, 1)) if guess is None \
         else np.array([guess.at(t) for t in times])
+    r0 = np.concatenate([model.residual(D[j] @ Y, Y[j], times[j]) for j in range(M)])
+    # the tolerance's scale: the loads the state balances (a warm start's small first
+    # residual would ask for less than the round-off of the blade-root rows)
+    scale = max(np.abs(r0).max(), model.load_scale())
     KD = sp.kron(sp.csr_matrix(D), sp.identity(n), format="csr")
 
     def residual(Yflat):
@@ -257,7 +260,7 @@ def _harmonic_balance(model, harmonics, tol, max_iter, progress, guess) -> Perio
     ign = ignorable_columns(model.jacobians(np.zeros(n), Y[0], times[0])[0])
     Yflat, it = newton(residual, jacobian, Y.ravel(), tol=tol, max_iter=max_iter,
                        what=f"periodic steady state (harmonic balance, {harmonics} harmonics)",
-                       fixed=ign, linear_solve=krylov,
+                       fixed=ign, linear_solve=krylov, scale=scale,
                        # the chord method where each Jacobian is dear (GMRES-sized systems);
                        # small ones keep Newton's quadratic last step (a steady state far
                        # below the tolerance, whose symmetry Fast Floquet relies on)

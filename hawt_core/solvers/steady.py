@@ -15,7 +15,7 @@ def is_time_invariant_at(model, y, times=None, tol=1e-9) -> bool:
     if times is None:     # a standing rotor (period infinite) does not change with time
         times = np.linspace(0, model.period, 7)[:-1] if np.isfinite(model.period) else [0.0]
     z = np.zeros(model.n)
-    scale = max(1.0, np.abs(model.residual(z, model.initial_guess(), 0.0)).max())
+    scale = model.load_scale()
     return all(np.abs(model.residual(z, y, t)).max() <= tol * scale for t in times)
 
 def ignorable_columns(J, rtol=1e-12) -> np.ndarray:
@@ -39,7 +39,8 @@ def constant_steady_state(model, tol=1e-10) -> np.ndarray:
     # Newton's first step is at y0 again: reuse J0 there
     jac = lambda y: J0 if np.array_equal(y, y0) else model.jacobians(z, y, 0.0)[0]
     ignorable = ignorable_columns(J0)
-    y, _ = newton(fun, jac, y0, tol=tol, what="turbine steady state", fixed=ignorable)
+    y, _ = newton(fun, jac, y0, tol=tol, what="turbine steady state", fixed=ignorable,
+                  scale=model.load_scale())
     if not is_time_invariant_at(model, y):
         raise ValueError("steady state: this configuration (gravity, tilt or an asymmetric "
                          "rotor) has a periodic steady state, not a constant one; use the "

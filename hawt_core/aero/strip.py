@@ -1,0 +1,68 @@
+"""Strip theory at a beam's Gauss points: the airfoil loads of sections in a relative wind.
+
+Each Gauss point of a blade's beam carries an airfoil of chord ``c`` and aerodynamic twist
+``tau`` (interpolated from the AeroDyn stations), in the element's section frame (which
+carries the pitch and a curved line's turn) turned by the elastic rotation: the deformed
+section frame B.  Given the air velocity relative to the section ``W`` in B components, in
+B's chord plane (B2, B3):
+
+    phi_B = atan2(W3, -W2),   alpha = phi_B + tau,   q = rho (W2^2 + W3^2) / 2
+
+(hawt's twist sign: AeroDyn's -BlTwist); lift along (W3, -W2)/|W|, drag along W, the pitching
+moment c_m q c^2 about B1, all at the reference line (the aerodynamic centre's offset is not
+modelled yet); the spanwise component W1 carries no load (independence principle).
+
+The beam's section-load unknowns are in components of the root frame b turned by the elastic
+rotation, not of B: :meth:`BladeStrips.to_section` and :meth:`BladeStrips.from_section` apply
+the element frames.  Everything is complex-step safe.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..numerics.rotations import atan2
+from .polars import StationPolars
+
+__all__ = ["BladeStrips"]
+
+
+class BladeStrips:
+    """The airfoils at Gauss points ``span_fraction`` (N, G) (fractions of the blade length,
+    0 at the root) of a blade with aerodynamic description ``aero`` (model.Aerodynamics),
+    element section frames ``frames`` (N, 3, 3) in b, in air of density ``rho`` [kg/m^3]."""
+
+    def __init__(self, aero, span_fraction: np.ndarray, frames: np.ndarray, rho: float):
+        s = np.asarray(span_fraction, float)
+        self.chord = np.interp(s, aero.stations, aero.chord)[:, :, None]        # (N, G, 1)
+        self.tau = np.interp(s, aero.stations, aero.twist)[:, :, None]
+        self.polars = StationPolars(aero, s.ravel())
+        self.frames = np.ascontiguousarray(np.asarray(frames, float)[:, None, None, :, :])
+        self.rho = float(rho)
+
+    def to_section(self, x):
+        """Turned-b components (N, G, B, 3) -> section-frame B components."""
+        return np.einsum("ngbji,ngbj->ngbi", self.frames, x)
+
+    def from_section(self, x):
+        """Section-frame B components (N, G, B, 3) -> turned-b components."""
+        return np.einsum("ngbij,ngbj->ngbi", self.frames, x)
+
+    def loads(self, W):
+        """Force and moment per unit length [N/m, N m/m] (N, G, B, 3) in section-frame
+        components from the relative air velocity ``W`` (N, G, B, 3) [m/s] in section-frame
+        components, and a dict of the Gauss-point arrays (N, G, B): ``alpha`` [rad], ``w``
+        (the chord-plane speed [m/s]), ``cl``, ``cd``."""
+        W2, W3 = W[..., 1], W[..., 2]
+        w2 = W2 * W2 + W3 * W3
+        w = np.sqrt(w2)
+        alpha = atan2(W3, -W2) + self.tau
+        B = alpha.shape[2]
+        cl, cd, cm = self.polars.coefficients(alpha.transpose(2, 0, 1).reshape(B, -1))
+        cl, cd, cm = (c.reshape(B, *alpha.shape[:2]).transpose(1, 2, 0) for c in (cl, cd, cm))
+        qc = 0.5 * self.rho * w2 * self.chord
+        force = np.zeros(W.shape, dtype=W.dtype)
+        force[..., 1] = qc * (cl * W3 + cd * W2) / w
+        force[..., 2] = qc * (-cl * W2 + cd * W3) / w
+        moment = np.zeros(W.shape, dtype=W.dtype)
+        moment[..., 0] = qc * self.chord * cm
+        return force, moment, {"alpha": alpha, "w": w, "cl": cl, "cd": cd}

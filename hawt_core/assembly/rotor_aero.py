@@ -1,0 +1,114 @@
+"""Blade-element loads on every blade of the whole turbine, with the wake frozen.
+
+The turbine's residual (assembly/turbine.py) gives each blade's beam, at every Gauss point, the
+air velocity relative to the deformed section:
+
+    W = U_wind - a U0 s3 - a' Omega0 r t - V
+
+with ``U_wind`` the free wind (uniform; its direction relative to the rotor follows the yaw,
+tilt, azimuth, teeter and tower-top rotation of the rigid system, through the blade's root
+frame), ``s3`` the shaft axis and ``t`` the direction of the blade's rotation (``s3 x b1``,
+normalized), both in the root frame, ``V`` the section's inertial velocity (rigid motion and
+deformation) and the airfoil loads of aero/strip.py.
+
+Frozen wake: the axial and tangential inductions ``a``, ``a'`` at each Gauss point are held at
+the axisymmetric blade-element-momentum steady state of the rotor at the same rotor speed,
+pitch and rotor-normal wind ``U0`` (assembly/aero_blade.py: Ning's BEM with Prandtl's tip and
+hub losses and Buhl's high-induction thrust, solved with the flexible blade), as OpenFAST's
+linearization does with ``FrozenWake = True`` (AeroDyn v15 user guide, "Linearization"): the
+induced velocity moves with the rotor (along its perturbed shaft axis) but does not respond
+to the perturbations.  Perturbation loads therefore come from the sections' motion (the
+aerodynamic damping and stiffness of quasi-steady strip theory); no extra unknowns.
+
+Not modelled here: wind shear and tower shadow across the rotor, skewed-wake correction of
+the inductions in yawed or tilted flow, loads on the tower and nacelle, dynamic inflow and
+unsteady-airfoil states (the blade model has Oye's inflow; the turbine's linearization is
+quasi-steady), the aerodynamic centre's offset from the reference line.
+"""
+from __future__ import annotations
+
+from typing import Optional
+
+import numpy as np
+
+from ..aero.strip import BladeStrips
+from ..aero.wind import Wind
+from ..model import Turbine
+from .aero_blade import AeroelasticBlade
+
+__all__ = ["FrozenWakeRotor"]
+
+
+class FrozenWakeRotor:
+    """The aerodynamic loads of the blades of ``turbine`` (with ``elements`` per blade, at
+    ``rotor_speed`` [rad/s]) in the steady uniform ``wind`` (aero.wind.Wind: speed, direction;
+    no shear or tower shadow yet), air density ``rho`` [kg/m^3].
+
+    ``inductions``: (a, a') (N, G) at the beam's Gauss points, default the axisymmetric BEM
+    steady state; ``blade_state`` is then that solution's beam state (a starting guess for the
+    turbine's steady state)."""
+
+    def __init__(self, turbine: Turbine, wind: Wind, rotor_speed: float, beam,
+                 rho: float = 1.225, inductions: Optional[tuple] = None):
+        aero = turbine.aerodynamics
+        if aero is None:
+            raise ValueError(f"wind: turbine {turbine.name!r} has no aerodynamics section, so "
+                             "it cannot be analysed in wind")
+        if wind.shear_exponent or wind.tower_radius or wind.history or wind.gust is not None:
+            raise ValueError("wind: only a steady uniform wind (speed, direction) is modelled "
+                             "on the whole turbine yet; shear_exponent, tower_radius, history "
+                             "and gust must be unset")
+        if not wind.speed > 0:
+            raise ValueError(f"wind.speed: {wind.speed!r} is not allowed; need a number > 0 "
+                             "[m/s]")
+        self.wind = wind
+        self.omega = float(rotor_speed)
+        self.rho = float(rho)
+        self.velocity = np.asarray(wind.velocity(0.0, np.zeros(3)), float)       # in N
+        tilt = float(turbine.nacelle.shaft_tilt)
+        # rotor-normal speed of the reference (unyawed) rotor: s3 = cos(tilt) n3 + sin n1
+        self.normal_speed = float(self.velocity @ np.array([np.sin(tilt), 0.0, np.cos(tilt)]))
+        if not self.normal_speed > 0:
+            raise ValueError(f"wind.direction: {wind.direction!r} is not allowed; the wind must "
+                             "blow through the rotor from upwind (|direction| < 90 deg)")
+        L, e = turbine.blade.length, turbine.hub.radius
+        xg = beam.xg
+        # distance from the shaft [m]: the root point at e in the hub plane, the coned axis
+        self.r = (e + xg * np.cos(turbine.rotor.precone))[:, :, None]
+        self.strips = BladeStrips(aero, xg / L, beam.props.element_frames(), rho)
+        self.blade_state = None
+        if inductions is None:
+            blade = AeroelasticBlade(turbine, self.normal_speed, elements=beam.N,
+                                     rotor_speed=self.omega, rho=rho)
+            y = blade.steady_state()
+            inductions = blade.inductions(y)
+            self.blade_state = y[:blade.n_beam]
+        a, ap = (np.asarray(x, float) for x in inductions)
+        if a.shape != xg.shape or ap.shape != xg.shape:
+            raise ValueError(f"inductions: need two arrays of shape {xg.shape} (elements, "
+                             "Gauss points)")
+        # the frozen induced velocity's magnitudes along s3 and along t [m/s], (N, G, 1, 1)
+        self._axial = (a * self.normal_speed)[:, :, None, None]
+        self._swirl = (ap[:, :, None] * self.omega * self.r)[..., None]
+        self.inductions = (a, ap)
+
+    def root_vectors(self, B, S):
+        """(..., Nb, 3, 3): per blade the free wind, the shaft axis s3 and the direction of
+        rotation t in the blade's root frame, from the root bases ``B`` (..., Nb, 3, 3) and the
+        shaft basis ``S`` (..., 3, 3) (RigidSystem.frames: columns are unit vectors in N)."""
+        wind = np.einsum("...ji,j->...i", B, self.velocity)
+        s3 = np.einsum("...ji,...j->...i", B, S[..., None, :, 2])
+        # t = s3 x b1 / |s3 x b1| in root components (b1 = e1)
+        t = np.zeros(s3.shape, dtype=s3.dtype)
+        norm = np.sqrt(s3[..., 1] ** 2 + s3[..., 2] ** 2)
+        t[..., 1], t[..., 2] = s3[..., 2] / norm, -s3[..., 1] / norm
+        return np.stack([wind, s3, t], axis=-2)
+
+    def section_loads(self, sec):
+        """The beam's ``section_loads`` callback (fem/beam.py): force and moment per length in
+        turned-b components from the Gauss-point velocities and the root vectors."""
+        st = self.strips
+        wind, s3, t = (st.to_section(sec["wind"][..., j, :]) for j in range(3))
+        W = wind - self._axial * s3 - self._swirl * t - st.to_section(sec["V"])
+        force, moment, _ = st.loads(W)
+        return st.from_section(force), st.from_section(moment)

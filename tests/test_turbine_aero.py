@@ -1,0 +1,196 @@
+"""The whole turbine in wind (assembly/rotor_aero.py, TurbineModel(wind=...)): blade-element
+loads in the one residual, frozen wake; aeroelastic Floquet (``hawt modes --wind``).
+
+References (each test states its tolerance):
+* Lock's flap damping: a rigid blade flapping about a hinge on the shaft axis with
+  quasi-steady strip theory (lift slope a, no drag, no inflow) obeys
+  beta'' + (gamma/8) Omega beta' + nu^2 Omega^2 beta = 0, gamma = rho a c R^4 / I
+  (Johnson, Helicopter Theory, 1980, section 5.3: the "Lock number"); for a teetering
+  two-bladed rotor with the blades from the hub radius e to R the same derivation gives the
+  real part of the teeter exponent -C / (2 I) with C = 2 (rho a c Omega / 2) (R^4 - e^4) / 4
+  and I the rotor's teeter inertia (closed-form integrals in the test);
+* the aeroelastic blade of assembly/aero_blade.py (a separate assembly: SpinningBlade, its own
+  induction unknowns): in axisymmetric flow each blade of the turbine carries its loads;
+* torque balance: in steady operation the flexible shaft's twist times its stiffness is the
+  rotor's aerodynamic torque (generator power = aerodynamic power; the shaft damper does no
+  work in a steady state);
+* the structured Jacobians against plain coloured complex steps on the whole residual, and
+  complex steps against central differences;
+* Hill's method in multi-blade coordinates against Radau IIA monodromy (two independent
+  Floquet solutions) in wind.
+"""
+from __future__ import annotations
+
+import warnings
+from dataclasses import replace
+
+import numpy as np
+import pytest
+import yaml
+
+from hawt_core.aero.wind import Wind
+from hawt_core.assembly import TurbineModel
+from hawt_core.assembly.aero_blade import AeroelasticBlade
+from hawt_core.io.catalog import load_any
+from hawt_core.io import dump_turbine, load_turbine, turbine_from_dict
+from hawt_core.solvers.periodic import periodic_steady_state
+from hawt_core.solvers.steady import constant_steady_state
+
+RHO = 1.225
+LIFT_SLOPE = 2 * np.pi
+CHORD = 0.5
+
+
+def teetering_rotor(stiffness=1e3, gravity=False, tilt=0.0, yaw_free=False):
+    """The paper's two-bladed teetering turbine, blades ``stiffness`` times stiffer, with a
+    flat-plate airfoil (cl = 2 pi alpha, no drag or moment) of uniform chord and no twist."""
+    d = yaml.safe_load(dump_turbine(load_turbine()))
+    sec = d["blade"]["sections"]
+    for k in ("gj", "ei2", "ei3"):
+        sec[k] = float(sec[k]) * stiffness
+    d["nacelle"].update(yaw_free=yaw_free, shaft_tilt=tilt, yaw_stiffness=0.0)
+    d["gravity"]["enabled"] = gravity
+    d["aerodynamics"] = {
+        "stations": [0.0, 1.0], "chord": [CHORD, CHORD], "twist": [0.0, 0.0], "airfoil": [0, 0],
+        "polars": [{"name": "flat plate", "alpha": [-0.5, 0.5],
+                    "cl": [-0.5 * LIFT_SLOPE, 0.5 * LIFT_SLOPE], "cd": [0.0, 0.0],
+                    "cm": [0.0, 0.0]}]}
+    return turbine_from_dict(d)
+
+
+def nrel5mw():
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return load_any("nrel5mw")
+
+
+def axisymmetric(t, rpm=9.16, pitch_deg=0.0):
+    """``t`` on a rigid tower, yaw locked, no tilt or gravity: axisymmetric in axial wind."""
+    return replace(t, tower=None, gravity=replace(t.gravity, enabled=False),
+                   nacelle=replace(t.nacelle, yaw_free=False, shaft_tilt=0.0),
+                   rotor=replace(t.rotor, speed=rpm * np.pi / 30,
+                                 pitch=-np.radians(pitch_deg)))
+
+
+def test_teeter_damping_is_locks_closed_form():
+    """Reference: Lock's quasi-steady flap damping (module docstring).  A flat plate at zero
+    angle of attack (wind 1 mm/s, inductions frozen at zero) carries no steady lift, so the
+    teeter exponent's real part is pure aerodynamic damping: -C / (2 I) within 1e-5 (found
+    4e-7 with blades 1e3 times stiffer, 5e-6 with 1e2, 1e-8 with 1e4: the blades' residual
+    flexibility); in a vacuum it is 0 (1e-9)."""
+    t = teetering_rotor()
+    n = 4
+    omega = t.rotor.speed
+    e, L = t.hub.radius, t.blade.length
+    R = e + L
+    m = float(np.mean(t.blade.sections.mass))
+    inertia = 2 * m * (R ** 3 - e ** 3) / 3 + t.hub.inertia_lateral
+    C = 2 * 0.5 * RHO * LIFT_SLOPE * CHORD * omega * (R ** 4 - e ** 4) / 4
+    expected = -C / (2 * inertia)
+    found = {}
+    for wind in (None, Wind(1e-3)):
+        kw = {} if wind is None else {
+            "wind": wind, "inductions": (np.zeros((n, 3)), np.zeros((n, 3)))}
+        model = TurbineModel(t, elements=n, **kw)
+        y = constant_steady_state(model)
+        E, A = (M.toarray() for M in model.linearize(y))
+        import scipy.linalg as sl
+        lam, X = sl.eig(A, E)
+        ok = np.isfinite(lam) & (np.abs(lam) < 1e6)
+        lam, X = lam[ok], X[:, ok]
+        rows, wts = model.display_rows()
+        share = np.abs(X[model.layout["teeter"]]) * wts[0] / np.abs(X[rows] * wts[:, None]).max(0)
+        k = int(np.argmax(share * (lam.imag > 0)))
+        found[wind is None] = lam[k]
+    assert abs(found[True].real) <= 1e-9 * omega
+    assert found[False].real == pytest.approx(expected, rel=1e-5)
+    # and the frequency: the centrifugal teeter stiffness Omega^2 (I_33 - I_11) of the
+    # spinning rotor (Euler's equations: blades, a line along h1, give I_b; the hub Ihlong -
+    # Ihlat) over the teeter inertia, damped: sqrt(w_n^2 - (C / 2 I)^2)
+    blades = inertia - t.hub.inertia_lateral
+    wn2 = omega ** 2 * (blades + t.hub.inertia_longitudinal - t.hub.inertia_lateral) / inertia
+    assert found[False].imag == pytest.approx(np.sqrt(wn2 - expected ** 2), rel=1e-5)
+
+
+def test_each_blade_carries_the_aeroelastic_blade_loads_and_the_shaft_their_torque():
+    """References: the aeroelastic blade on the spinning hub (separate assembly) and the
+    torque balance of a steady state.  NREL 5-MW, axisymmetric (rigid tower, no tilt or
+    gravity), 8 m/s, 9.16 rpm: the turbine's steady state is every blade in the blade
+    model's state (turbine residual at it below 1e-12 of the load scale; Newton moves it by
+    less than 1e-9 m), and with the flexible drivetrain the shaft twist times the stiffness
+    is the rotor's torque 3 x the blade's root torque within 1e-8."""
+    t = axisymmetric(nrel5mw())
+    n = 8
+    blade = AeroelasticBlade(t, 8.0, elements=n)
+    yb = blade.steady_state()
+    torque, _ = blade.root_loads(yb)
+    model = TurbineModel(t, elements=n, wind=Wind(8.0))
+    assert model.rigid.shaft_flexible
+    y0 = model.initial_guess()
+    r0 = model.residual(np.zeros(model.n), y0, 0.0)
+    assert np.abs(r0[model.nq + model.nu:]).max() <= 1e-12 * model.load_scale()
+    y = constant_steady_state(model)
+    for k in range(3):
+        b = model.layout.blade(k)
+        assert np.abs(y[b.u[1:]] - y0[b.u[1:]]).max() < 1e-9
+    twist = y[model.layout["shaft_twist"]]
+    shaft = -t.drivetrain.stiffness * twist
+    assert -shaft == pytest.approx(3 * torque, rel=1e-8)
+    assert 3 * torque * t.rotor.speed > 1e6          # a rotor producing power (about 2 MW)
+
+
+def test_structured_jacobians_in_wind_equal_complex_steps_on_the_whole_residual():
+    """Reference: plain coloured complex steps on the whole residual (jacobians_reference)
+    and central differences (step 1e-6 of each unknown's scale): the teetering rotor with free
+    yaw, gravity, tilt and a 15 deg yaw misalignment (the wind turns with yaw, tilt, azimuth
+    and teeter), and the NREL 5-MW with its flexible tower and drivetrain, within 1e-9 of the
+    largest entry (complex steps) and 1e-5 (differences)."""
+    cases = [
+        (teetering_rotor(stiffness=1.0, gravity=True, tilt=0.1, yaw_free=True), 3,
+         Wind(7.0, direction=np.radians(15.0))),
+        (replace(nrel5mw(), rotor=replace(nrel5mw().rotor, speed=1.0)), 3, Wind(9.0))]
+    rng = np.random.default_rng(3)
+    for t, n, wind in cases:
+        model = TurbineModel(t, elements=n, wind=wind)
+        y = model.initial_guess() + 1e-3 * rng.standard_normal(model.n)
+        yd = 1e-3 * rng.standard_normal(model.n)
+        tt = 0.37
+        Jy, Jd = model.jacobians(yd, y, tt)
+        Ry, Rd = model.jacobians_reference(yd, y, tt)
+        for J, Jr in ((Jy, Ry), (Jd, Rd)):
+            scale = abs(Jr).max()
+            assert abs(J - Jr).max() <= 1e-9 * scale
+        # central differences on the rigid columns and a few blade columns
+        cols = list(range(model.nq + model.nu)) + list(rng.choice(model.n, 6, replace=False))
+        dense = Jy.toarray()
+        for c in cols:
+            h = 1e-6 * max(1.0, abs(y[c]))
+            yp, ym = y.copy(), y.copy()
+            yp[c] += h
+            ym[c] -= h
+            fd = (model.residual(yd, yp, tt) - model.residual(yd, ym, tt)) / (2 * h)
+            assert np.abs(fd - dense[:, c]).max() <= 1e-5 * max(1.0, np.abs(dense).max())
+
+
+def test_in_a_vacuum_nothing_changes():
+    """Reference: the model without wind (the paper's): the residual of a turbine with an
+    aerodynamics section and no wind equals that of the same turbine without the section
+    (exactly), so every structural result (Table 2) is unchanged."""
+    t = teetering_rotor(stiffness=1.0, gravity=True, tilt=0.1, yaw_free=True)
+    bare = replace(t, aerodynamics=None)
+    a, b = TurbineModel(t, elements=3), TurbineModel(bare, elements=3)
+    y = a.initial_guess() + 1e-3 * np.random.default_rng(0).standard_normal(a.n)
+    assert np.array_equal(a.residual(0 * y, y, 0.3), b.residual(0 * y, y, 0.3))
+    assert a.aero is None
+
+
+def test_wind_needs_an_aerodynamics_section_and_a_plain_wind():
+    """Bad input: a turbine without aerodynamics in wind, and wind features not modelled on
+    the whole turbine yet, are refused naming the field."""
+    with pytest.raises(ValueError, match="no aerodynamics section"):
+        TurbineModel(load_turbine(), elements=2, wind=Wind(8.0))
+    with pytest.raises(ValueError, match="shear_exponent"):
+        TurbineModel(teetering_rotor(), elements=2, wind=Wind(8.0, shear_exponent=0.2))
+    with pytest.raises(ValueError, match="direction"):
+        TurbineModel(teetering_rotor(), elements=2, wind=Wind(8.0, direction=np.radians(120)),
+                     inductions=(np.zeros((2, 3)), np.zeros((2, 3))))
