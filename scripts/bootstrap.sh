@@ -124,8 +124,8 @@ _hawt_bootstrap_main() {
   fi
 
   # --- install ----------------------------------------------------------------------------
-  say "installing hawt[test,ros,turbines] (editable) and the ROS 2 wheels into $venv"
-  pip_q install -q -e "$root[test,ros,turbines]"
+  say "installing hawt[test,ros,turbines,cluster] (editable) and the ROS 2 wheels into $venv"
+  pip_q install -q -e "$root[test,ros,turbines,cluster]"
   # the OpenFAST decks (NREL 5-MW, IEA 15-MW, ...) and the ROSCO controller library ship in
   # the rosco wheel; hawt reads its data only, so its heavy dependencies are not installed
   say "installing the rosco wheel (OpenFAST decks and libdiscon) without its dependencies"

@@ -205,6 +205,7 @@ def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
     # the sweep's variable (the rotor speed, or the wind speed of a sweep in wind): curves
     # are continued and interpolated along it; per-rev values convert with the speeds
     x = np.array([float(p.get("abscissa", p.get("speed", np.nan))) for p in points])
+    in_wind = bool(np.any(np.isfinite(x) & (x != speeds)))
 
     def new_track(m, v):
         t = {"label": m["label"], "family": m["family"], "symmetry": m["symmetry"],
@@ -223,6 +224,7 @@ def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
                         np.nan if fz is None else fz)
         t["f"] = m["frequency_hz"] + off * w / (2 * np.pi) if np.isfinite(w) else \
             m["frequency_hz"]
+        t["w"] = w
         if not mac < keep_mac:
             # a poorly matching vector (two nearly equal multipliers whose eigenvectors mix)
             # does not replace the track's reference: the next clean speed matches the clean one
@@ -255,6 +257,13 @@ def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
         cont = fm[None, :] + off * rev                               # continued Hz
         floor = 0.1 * rev if rev > 0 else 1e-3
         rel = np.abs(cont - ft[:, None]) / np.maximum(np.abs(ft[:, None]), floor)
+        if in_wind and rev > 0:
+            # a sweep in wind moves the rotor speed in large steps: a mode that stays at the
+            # same per-rev (a teeter mode at 1 per-rev) continues its track
+            prev = np.array([t["w"] for t in tracks]) / (2 * np.pi)
+            pr_t = ft / np.where(prev > 0, prev, np.nan)
+            rel_pr = np.abs(cont / rev - pr_t[:, None]) / np.maximum(np.abs(pr_t[:, None]), 0.1)
+            rel = np.fmin(rel, rel_pr)
         cost = (1.0 - mac) + frequency_weight * np.minimum(rel, 1.0)
         ti, mj = linear_sum_assignment(cost)
         taken = set()

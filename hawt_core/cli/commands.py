@@ -105,11 +105,10 @@ def _modes_args(p):
                      "the data. With --wind instead of --speeds: the aeroelastic diagram "
                      "against wind speed at the controller schedule's operating points.")
 def cmd_campbell(args) -> int:
-    import concurrent.futures as cf
     import math
-    import os
     from ..analyses.campbell import campbell, campbell_in_wind
     from .aero import controller_schedule
+    from .executors import sweep_executor
     if (args.speeds is None) == (args.wind is None):
         raise ValueError("campbell: give either --speeds START:STOP:COUNT (rotor speeds, in a "
                          "vacuum) or --wind START:STOP:COUNT (wind speeds, at the operating "
@@ -127,10 +126,10 @@ def cmd_campbell(args) -> int:
             raise ValueError("--wind: no controller file for this turbine; give --controller "
                              "DISCON.IN (its schedule sets the rotor speed and pitch)")
     status = ProgressLine(True)
-    workers = args.workers or os.cpu_count() or 1
     common = dict(elements=args.elements, steps=args.steps, method=args.method,
                   progress=status, frame=args.frame, max_hz=args.max_hz)
-    with cf.ProcessPoolExecutor(max_workers=workers) as pool:
+    with sweep_executor(args.scheduler, args.workers) as (pool, where):
+        status(0.0, f"running on {where}")
         try:
             if schedule is not None:
                 result = campbell_in_wind(turbine, args.wind, schedule, executor=pool,
@@ -140,7 +139,7 @@ def cmd_campbell(args) -> int:
                 result = campbell(turbine, args.speeds, executor=pool, **common)
         finally:
             status.close()
-    result.settings["workers"] = workers
+    result.settings["executor"] = where
     print(result.table())
     if args.csv:
         result.to_csv(args.csv)
@@ -176,6 +175,9 @@ def _campbell_args(p):
     marching_args(p)
     p.add_argument("--workers", type=positive_int, default=None, metavar="W",
                    help="worker processes (default: one per CPU)")
+    p.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
+                   help="run the points on this Dask distributed scheduler's workers "
+                        "(default: $HAWT_SCHEDULER, else local processes)")
     p.add_argument("--plot", metavar="FILE.png", default=None,
                    help="write the Campbell diagram to this PNG file")
     p.add_argument("--csv", metavar="FILE", default=None,
