@@ -126,3 +126,38 @@ def test_campbell_command_needs_one_sweep_and_a_schedule(tmp_path, capsys):
     assert cli.main(["campbell", str(f), "--wind", "4:8:2"]) != 0
     assert "no controller file" in capsys.readouterr().err
     assert cli.main(["campbell", str(f), "--wind", "4:8:2", "--scheduler", "nowhere"]) != 0
+
+
+def test_turbine_flutter_sweep_finds_the_damping_crossing(tmp_path, capsys):
+    """The overspeed sweep in wind (analyses/turbine_flutter.py).  References: the point
+    analysis at the reported speed (the crossing is interpolated linearly between sweep
+    points: there the mode's damping is -DAMPING_TOL within 2e-4, the interpolation's error
+    at this spacing); the stiff teetering rotor (blades 1e3 x stiffer) has no unstable mode in
+    the range, and the paper's torsionally soft blade with GJ x 4 loses the damping of a mode
+    inside it.  The command prints the same result as JSON."""
+    from dataclasses import replace
+    from hawt_core.analyses.turbine_flutter import DAMPING_TOL, turbine_flutter
+    speeds = np.linspace(3.0, 7.0, 5)
+    stiff = turbine_flutter(teetering_rotor(), Wind(6.0), speeds, elements=2, method="radau",
+                            steps=160)
+    assert stiff.flutter_speed is None
+    soft = teetering_rotor(stiffness=1.0)
+    sec = soft.blade.sections
+    soft = replace(soft, blade=replace(soft.blade, sections=replace(sec, gj=4 * sec.gj)))
+    r = turbine_flutter(soft, Wind(6.0), speeds, elements=2, method="radau", steps=160)
+    assert r.flutter_speed is not None and not r.unstable_at_start
+    assert speeds[0] < r.flutter_speed < speeds[-1]
+    t = replace(soft, rotor=replace(soft.rotor, speed=r.flutter_speed))
+    point = modal_analysis(t, elements=2, wind=Wind(6.0), method="radau", steps=160)
+    label = r.flutter_mode.split(" #")[0]
+    from hawt_core.results.plotting import mode_label
+    z = [m.damping_ratio for m in point.modes if mode_label(m) == label]
+    assert z and abs(z[0] + DAMPING_TOL) < 2e-4
+    f = tmp_path / "soft.yaml"
+    f.write_text(dump_turbine(soft))
+    assert cli.main(["flutter", str(f), "--wind", "6", "--rpm", "28.6479:66.8451:5",
+                     "--pitch", "0", "-n", "2", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["flutter_rotor_speed"] == pytest.approx(r.flutter_speed, rel=1e-3)
+    assert cli.main(["flutter", str(f), "-n", "2"]) != 0
+    assert "--wind U and --rpm" in capsys.readouterr().err

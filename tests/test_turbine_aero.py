@@ -33,7 +33,6 @@ from hawt_core.assembly import TurbineModel
 from hawt_core.assembly.aero_blade import AeroelasticBlade
 from hawt_core.io.catalog import load_any
 from hawt_core.io import dump_turbine, load_turbine, turbine_from_dict
-from hawt_core.solvers.periodic import periodic_steady_state
 from hawt_core.solvers.steady import constant_steady_state
 
 RHO = 1.225

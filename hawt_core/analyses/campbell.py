@@ -479,7 +479,7 @@ def campbell(turbine: Turbine, speeds, elements: Optional[int] = None,
              executor: Optional[cf.Executor] = None,
              progress: Optional[Callable[[float, str], None]] = None,
              errors: str = "skip", frame: Optional[str] = None,
-             max_hz: Optional[float] = None) -> CampbellResult:
+             max_hz: Optional[float] = None, wind=None, rho: float = 1.225) -> CampbellResult:
     """Floquet modal analysis of ``turbine`` at every rotor speed of ``speeds`` [rad/s]
     (run as :func:`campbell_point` tasks on ``executor``; default a ProcessPoolExecutor with
     ``os.cpu_count()`` workers, shut down afterwards; a given executor is left running), modes
@@ -493,7 +493,9 @@ def campbell(turbine: Turbine, speeds, elements: Optional[int] = None,
     ``errors``: "skip" (default) keeps going when the analysis fails at a speed (e.g. a steady
     state that does not converge): that point gets no modes and an ``"error"`` message
     (``CampbellResult.failed``); if every speed fails the first error is raised.  "raise"
-    raises the first failure."""
+    raises the first failure.  ``wind`` (aero.wind.Wind): every speed in that wind at the
+    turbine's pitch (frozen wake, inductions of each rotor speed's own BEM state; air density
+    ``rho``): the overspeed sweep of a turbine flutter analysis."""
     frame = _check_sweep(turbine, errors, frame)
     arr = np.sort(check_speeds(speeds))
     validate_request(elements, None, steps, method)
@@ -501,10 +503,15 @@ def campbell(turbine: Turbine, speeds, elements: Optional[int] = None,
     max_hz = float(max_hz)
     t0 = time.perf_counter()
     tasks = [{"turbine": turbine, "speed": float(w), "elements": elements, "method": method,
-              **_band(w, march, base, max_hz, frame)} for w in arr]
+              "wind": wind, "rho": rho, **_band(w, march, base, max_hz, frame)} for w in arr]
     results, failures, workers = _run(tasks, executor, progress, "speeds",
                                       lambda i: f"{arr[i]:.4g} rad/s done", errors)
-    return _assemble(turbine, arr, results, failures, errors, max_hz, frame, workers, t0)
+    extra = None if wind is None else {
+        "wind_speed": float(wind.speed), "wind_direction_deg": float(np.degrees(wind.direction)),
+        "air_density": rho, "pitch_deg": float(np.degrees(-turbine.rotor.pitch)),
+        "aerodynamics": "blade-element momentum, frozen wake"}
+    return _assemble(turbine, arr, results, failures, errors, max_hz, frame, workers, t0,
+                     extra=extra)
 
 
 def _band(speed: float, march: str, base: int, max_hz: float, frame: str) -> dict:

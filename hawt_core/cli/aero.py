@@ -119,41 +119,82 @@ SHIPPED_WINGS = {"goland": "goland_wing.yaml"}
 
 
 def load_wing_case(spec: str):
-    """A model.Wing from a wing file or a shipped wing name."""
+    """A model.Wing from a wing file or a shipped wing name, or None when ``spec`` is
+    neither (then it names a turbine)."""
     from pathlib import Path
     from ..io.wing_yaml import is_wing_file, load_wing
     p = Path(spec)
     if not p.exists() and spec in SHIPPED_WINGS:
         p = Path(__file__).resolve().parent.parent / "data" / SHIPPED_WINGS[spec]
-    elif not p.exists():
-        raise ValueError(f"CASE: {spec!r} is not a wing file nor a shipped wing case "
-                         f"({', '.join(SHIPPED_WINGS)})")
-    elif not is_wing_file(p):
-        raise ValueError(f"CASE: {spec!r} is not a wing file (its first key is not 'wing'); "
-                         "the flutter of a whole turbine needs the turbine's aerodynamic "
-                         "coupling, which hawt does not have yet")
+    elif not p.exists() or not is_wing_file(p):
+        return None
     return load_wing(p)
 
 
-@command("flutter", help="flutter and divergence speeds of a cantilever wing (strip theory)",
+@command("flutter", help="flutter speed of a cantilever wing, or overspeed flutter of a turbine",
          description="Aeroelastic modes of a cantilever wing in a uniform stream (hawt's beam "
                      "elements, Theodorsen's strip loads with Wagner's lag as states) against "
                      "the flow speed: the lowest speed at which a mode's damping crosses "
                      "zero, with its frequency, and the static divergence speed. CASE: a wing "
-                     "file or a shipped case (goland).")
+                     "file or a shipped case (goland); or a turbine with --wind U --rpm "
+                     "A:B:N: its aeroelastic Floquet modes (frozen-wake BEM) over rotor speeds, "
+                     "and the lowest speed where a mode's damping crosses zero.")
 def cmd_flutter(args) -> int:
     from ..analyses.flutter import flutter
     wing = load_wing_case(args.case)
+    if wing is None:
+        return _turbine_flutter(args)
+    if args.wind is not None or args.rpm is not None:
+        raise ValueError("--wind, --rpm: only for a turbine CASE (a wing sweeps --speeds)")
     return report(args, lambda status: flutter(
         wing, args.speeds, elements=args.elements, modes=args.modes,
         unsteady=not args.quasi_steady, progress=status))
 
 
+def _turbine_flutter(args) -> int:
+    """``hawt flutter TURBINE --wind U --rpm A:B:N``: the overspeed sweep in wind."""
+    import math
+    from ..analyses.turbine_flutter import turbine_flutter
+    from .executors import sweep_executor
+    from .parser import load
+    if args.wind is None or args.rpm is None:
+        raise ValueError(f"CASE: {args.case!r} is not a wing file nor a shipped wing case "
+                         f"({', '.join(SHIPPED_WINGS)}); for a turbine give --wind U and "
+                         "--rpm START:STOP:COUNT (the overspeed sweep)")
+    if args.rpm[0] <= 0 or len(args.rpm) < 2:
+        raise ValueError("--rpm: need COUNT >= 2 rotor speeds > 0 [rpm]")
+    turbine = load(args.case)
+    args.rotor_speed = args.rpm[0] * math.pi / 30       # the operating point's pitch only
+    check_wind_args(args)
+    turbine, wind, point = turbine_in_wind(args, turbine)
+    speeds = [n * math.pi / 30 for n in args.rpm]
+    with sweep_executor(args.scheduler, None) as (pool, where):
+        def run(status):
+            r = turbine_flutter(turbine, wind, speeds, elements=args.elements,
+                                executor=pool, progress=status)
+            r.campbell.settings.update(executor=where, operating_point=point)
+            return r
+        return report(args, run)
+
+
 @cmd_flutter.arguments
 def _flutter_args(p):
     from .parser import elements_type, positive_int
-    p.add_argument("case", metavar="CASE", help="a wing file (docs/aerodynamics.md) or a "
-                   f"shipped case: {', '.join(SHIPPED_WINGS)}")
+    p.add_argument("case", metavar="CASE", help="a wing file (docs/aerodynamics.md), a "
+                   f"shipped case ({', '.join(SHIPPED_WINGS)}), or a turbine (with --wind "
+                   "and --rpm: its overspeed flutter in wind)")
+    p.add_argument("--wind", type=finite_float("--wind", unit="m/s"), default=None,
+                   metavar="U", help="turbine: the wind speed [m/s]")
+    p.add_argument("--rpm", type=grid_type("--rpm", 1e-3, 1000.0, "rpm"), default=None,
+                   metavar="START:STOP:COUNT", help="turbine: rotor speeds [rpm] to sweep")
+    p.add_argument("--pitch", type=finite_float("--pitch", unit="deg"), default=None,
+                   metavar="DEG", help="turbine: collective pitch [deg] towards feather "
+                                       "(default: the schedule's at --wind, else the file's)")
+    p.add_argument("--controller", default=None, metavar="DISCON.IN",
+                   help="turbine: controller file whose schedule gives the pitch at --wind")
+    p.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
+                   help="turbine: run the speeds on this Dask scheduler's workers")
+    p.set_defaults(wind_direction=0.0, rotor_speed=None)
     p.add_argument("--speeds", type=grid_type("--speeds", 1e-3, 1e4, "m/s"),
                    default="20:200:19", metavar="START:STOP:COUNT",
                    help="flow speeds [m/s] (default 20:200:19)")

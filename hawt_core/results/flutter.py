@@ -10,7 +10,7 @@ from typing import Optional
 
 import numpy as np
 
-__all__ = ["FlutterResult"]
+__all__ = ["FlutterResult", "TurbineFlutterResult"]
 
 
 @dataclass
@@ -85,3 +85,70 @@ class FlutterResult:
             ax.grid(True, alpha=0.3)
         fig.tight_layout()
         return save_png(fig, path)
+
+
+@dataclass
+class TurbineFlutterResult:
+    """Overspeed flutter of a turbine in wind (analyses/turbine_flutter.py): the Campbell
+    result of the rotor-speed sweep in wind (``campbell``), and the lowest rotor speed
+    ``flutter_speed`` [rad/s] where a mode's damping crosses below -DAMPING_TOL, that mode's
+    label and frequency [Hz] (None when no mode does in the range); ``unstable_at_start``:
+    the mode is already unstable at the first speed (the crossing is below the range)."""
+
+    turbine: str
+    campbell: object
+    wind_speed: float
+    pitch_deg: float
+    flutter_speed: Optional[float]
+    flutter_mode: Optional[str]
+    flutter_frequency_hz: Optional[float]
+    unstable_at_start: bool = False
+
+    def to_dict(self) -> dict:
+        c = self.campbell
+        tracks = [{"label": t.label, "frequency_hz": [None if not np.isfinite(v) else float(v)
+                                                      for v in t.hz("rotating")],
+                   "damping_ratio": [None if not np.isfinite(v) else float(v)
+                                     for v in t.damping_ratio]} for t in c.tracks]
+        return {"case": self.turbine, "wind_speed": self.wind_speed, "pitch_deg": self.pitch_deg,
+                "flutter_rotor_speed": self.flutter_speed,
+                "flutter_rotor_speed_rpm": None if self.flutter_speed is None
+                else self.flutter_speed * 30 / np.pi,
+                "flutter_mode": self.flutter_mode,
+                "flutter_frequency_hz": self.flutter_frequency_hz,
+                "unstable_at_start": self.unstable_at_start,
+                "rotor_speeds": [float(w) for w in c.speeds], "tracks": tracks,
+                "settings": {k: v for k, v in c.settings.items() if k != "speeds"}}
+
+    def to_json(self, indent=None) -> str:
+        return json.dumps(self.to_dict(), indent=indent)
+
+    def table(self) -> str:
+        c = self.campbell
+        rpm = c.speeds * 30 / np.pi
+        lines = [f"{self.turbine} in {self.wind_speed:g} m/s wind, pitch {self.pitch_deg:.3g} "
+                 f"deg: {len(c.speeds)} rotor speeds from {rpm[0]:.4g} to {rpm[-1]:.4g} rpm "
+                 f"({c.settings.get('elements')} elements, {c.settings.get('method')}, "
+                 "frozen-wake blade-element loads)"]
+        if self.flutter_speed is None:
+            lines.append("no mode loses its damping in the range")
+        elif self.unstable_at_start:
+            lines.append(f"{self.flutter_mode} is unstable already at {rpm[0]:.4g} rpm "
+                         f"({self.flutter_frequency_hz:.4g} Hz): lower the first speed")
+        else:
+            lines.append(f"flutter at {self.flutter_speed * 30 / np.pi:.4g} rpm "
+                         f"({self.flutter_speed:.4g} rad/s): {self.flutter_mode}, "
+                         f"{self.flutter_frequency_hz:.4g} Hz")
+        lines.append("damping ratios [-] of the least damped modes")
+        order = sorted(c.tracks, key=lambda t: np.nanmin(t.damping_ratio))[:6]
+        lines.append(f"{'rpm':>8} " + "".join(f"{t.label[:20]:>22}" for t in order))
+        for i, n in enumerate(rpm):
+            lines.append(f"{n:>8.3f} " + "".join(
+                f"{t.damping_ratio[i]:>22.4f}" if np.isfinite(t.damping_ratio[i])
+                else f"{'-':>22}" for t in order))
+        lines.append(f"computed in {c.compute_time:.2f} s")
+        return "\n".join(lines)
+
+    def plot(self, path):
+        """Frequency and damping of the tracked modes against rotor speed (PNG)."""
+        return self.campbell.plot(path, tracks="all", frame="rotating")
