@@ -66,9 +66,11 @@ class ExtremeOperatingGust:
 
 def potential_flow_shadow(x, y, radius):
     """Velocity (u, v) / U of a uniform flow along +x past a cylinder of ``radius`` at the
-    origin: u = 1 - R^2 (x^2 - y^2) / rho^4, v = -2 R^2 x y / rho^4 (outside the cylinder)."""
-    rho2 = x * x + y * y
+    origin: u = 1 - R^2 (x^2 - y^2) / rho^4, v = -2 R^2 x y / rho^4 (outside the cylinder;
+    inside it, e.g. a point above the tower top that the caller masks, rho is held at R)."""
     r2 = radius * radius
+    rho2 = x * x + y * y
+    rho2 = np.where(np.real(rho2) > r2, rho2, r2 + 0 * rho2)
     return 1.0 - r2 * (x * x - y * y) / (rho2 * rho2), -2.0 * r2 * x * y / (rho2 * rho2)
 
 
@@ -122,7 +124,7 @@ class Wind:
 
     def velocity(self, t, points):
         """Wind velocity (..., 3) [m/s] in N components at the points (..., 3) [m, N] at time
-        t (a scalar)."""
+        t [s] (a scalar, or an array broadcastable to ``points.shape[:-1]``)."""
         points = np.asarray(points)
         height = self.origin_height + points[..., 0]
         if self.shear_exponent:
@@ -131,7 +133,7 @@ class Wind:
             factor = (ratio / self.reference_height) ** self.shear_exponent
         else:
             factor = np.ones_like(height)
-        speed = float(self.hub_speed(t)) * factor
+        speed = self.hub_speed(t) * factor
         c, s = math.cos(self.direction), math.sin(self.direction)
         # the wind's direction: n3 turned about n1 by `direction`, c n3 + s n1 x n3 = c n3 - s n2
         d2, d3 = -s, c

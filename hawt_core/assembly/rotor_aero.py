@@ -5,9 +5,12 @@ air velocity relative to the deformed section:
 
     W = U_wind - a U0 s3 - a' Omega0 r t - V
 
-with ``U_wind`` the free wind (uniform; its direction relative to the rotor follows the yaw,
-tilt, azimuth, teeter and tower-top rotation of the rigid system, through the blade's root
-frame), ``s3`` the shaft axis and ``t`` the direction of the blade's rotation (``s3 x b1``,
+with ``U_wind`` the free wind (aero/wind.py; its direction relative to the rotor follows the
+yaw, tilt, azimuth, teeter and tower-top rotation of the rigid system, through the blade's
+root frame; with shear, tower shadow, a history or a gust it is evaluated at each Gauss
+point's position P_k + B_k (X0 + u) and time: the root point from the rigid system, the
+deflected line from the beam, the tower top's own displacement neglected), ``s3`` the shaft
+axis and ``t`` the direction of the blade's rotation (``s3 x b1``,
 normalized), both in the root frame, ``V`` the section's inertial velocity (rigid motion and
 deformation) and the airfoil loads of aero/strip.py.
 
@@ -20,8 +23,9 @@ induced velocity moves with the rotor (along its perturbed shaft axis) but does 
 to the perturbations.  Perturbation loads therefore come from the sections' motion (the
 aerodynamic damping and stiffness of quasi-steady strip theory); no extra unknowns.
 
-Not modelled here: wind shear and tower shadow across the rotor, skewed-wake correction of
-the inductions in yawed or tilted flow, loads on the tower and nacelle, dynamic inflow and
+The inductions stay frozen whatever the wind does (a gust changes the loads through the
+relative velocity only).  Not modelled here: skewed-wake correction of the inductions in
+yawed or tilted flow, loads on the tower and nacelle, dynamic inflow and
 unsteady-airfoil states (the blade model has Oye's inflow; the turbine's linearization is
 quasi-steady), the aerodynamic centre's offset from the reference line.
 """
@@ -34,6 +38,7 @@ import numpy as np
 from ..aero.strip import BladeStrips
 from ..aero.wind import Wind
 from ..model import Turbine
+from ..numerics.rotations import rot_apply
 from .aero_blade import AeroelasticBlade
 
 __all__ = ["FrozenWakeRotor"]
@@ -41,8 +46,9 @@ __all__ = ["FrozenWakeRotor"]
 
 class FrozenWakeRotor:
     """The aerodynamic loads of the blades of ``turbine`` (with ``elements`` per blade, at
-    ``rotor_speed`` [rad/s]) in the steady uniform ``wind`` (aero.wind.Wind: speed, direction;
-    no shear or tower shadow yet), air density ``rho`` [kg/m^3].
+    ``rotor_speed`` [rad/s]) in ``wind`` (aero.wind.Wind: the inductions from its speed and
+    direction at the reference height; shear, shadow, history and gust act on the relative
+    velocity), air density ``rho`` [kg/m^3].
 
     ``inductions``: (a, a') (N, G) at the beam's Gauss points, default the axisymmetric BEM
     steady state; ``blade_state`` is then that solution's beam state (a starting guess for the
@@ -54,10 +60,9 @@ class FrozenWakeRotor:
         if aero is None:
             raise ValueError(f"wind: turbine {turbine.name!r} has no aerodynamics section, so "
                              "it cannot be analysed in wind")
-        if wind.shear_exponent or wind.tower_radius or wind.history or wind.gust is not None:
-            raise ValueError("wind: only a steady uniform wind (speed, direction) is modelled "
-                             "on the whole turbine yet; shear_exponent, tower_radius, history "
-                             "and gust must be unset")
+        #: the wind varies over the rotor or in time: evaluated at each Gauss point
+        self.field = bool(wind.shear_exponent or wind.tower_radius or wind.history
+                          or wind.gust is not None)
         if not wind.speed > 0:
             raise ValueError(f"wind.speed: {wind.speed!r} is not allowed; need a number > 0 "
                              "[m/s]")
@@ -92,23 +97,43 @@ class FrozenWakeRotor:
         self._swirl = (ap[:, :, None] * self.omega * self.r)[..., None]
         self.inductions = (a, ap)
 
-    def root_vectors(self, B, S):
-        """(..., Nb, 3, 3): per blade the free wind, the shaft axis s3 and the direction of
-        rotation t in the blade's root frame, from the root bases ``B`` (..., Nb, 3, 3) and the
-        shaft basis ``S`` (..., 3, 3) (RigidSystem.frames: columns are unit vectors in N)."""
-        wind = np.einsum("...ji,j->...i", B, self.velocity)
+    def root_data(self, B, S, P, t):
+        """What the blades' loads need from the rigid system, a dict of arrays with leading
+        dimensions (..., Nb): ``vectors`` (..., Nb, m, 3), the shaft axis s3, the direction
+        of rotation t (and the uniform free wind first, unless the wind is a field) in each
+        root frame; for a field also ``B`` (the root bases, ..., Nb, 3, 3), ``P`` (the root
+        points relative to the tower top, ..., Nb, 3) and ``time`` (..., Nb).  From the root
+        bases ``B``, the shaft basis ``S`` (..., 3, 3) (RigidSystem.frames: columns are unit
+        vectors in N), the root points ``P`` and the times ``t`` (...)."""
         s3 = np.einsum("...ji,...j->...i", B, S[..., None, :, 2])
         # t = s3 x b1 / |s3 x b1| in root components (b1 = e1)
-        t = np.zeros(s3.shape, dtype=s3.dtype)
+        tt = np.zeros(s3.shape, dtype=s3.dtype)
         norm = np.sqrt(s3[..., 1] ** 2 + s3[..., 2] ** 2)
-        t[..., 1], t[..., 2] = s3[..., 2] / norm, -s3[..., 1] / norm
-        return np.stack([wind, s3, t], axis=-2)
+        tt[..., 1], tt[..., 2] = s3[..., 2] / norm, -s3[..., 1] / norm
+        if not self.field:
+            wind = np.einsum("...ji,j->...i", B, self.velocity)
+            return {"vectors": np.stack([wind, s3, tt], axis=-2)}
+        time = np.broadcast_to(np.asarray(t, float)[..., None], s3.shape[:-1])
+        return {"vectors": np.stack([s3, tt], axis=-2), "B": B, "P": P, "time": time}
 
-    def section_loads(self, sec):
-        """The beam's ``section_loads`` callback (fem/beam.py): force and moment per length in
-        turned-b components from the Gauss-point velocities and the root vectors."""
+    def loads(self, air):
+        """The beam's ``section_loads`` callback (fem/beam.py) for blades with root data
+        ``air`` (root_data, leading dimension the beam batch): force and moment per length
+        in turned-b components from the Gauss-point velocities and the free wind."""
         st = self.strips
-        wind, s3, t = (st.to_section(sec["wind"][..., j, :]) for j in range(3))
-        W = wind - self._axial * s3 - self._swirl * t - st.to_section(sec["V"])
-        force, moment, _ = st.loads(W)
-        return st.from_section(force), st.from_section(moment)
+
+        def section_loads(sec):
+            vec = sec["wind"]
+            if self.field:
+                s3, t = (st.to_section(vec[..., j, :]) for j in range(2))
+                # the Gauss points in N, the wind there, in root then turned-b components
+                X = air["P"] + np.einsum("bij,ngbj->ngbi", air["B"], sec["position"])
+                U = self.wind.velocity(air["time"], X)
+                Ub = np.einsum("bji,ngbj->ngbi", air["B"], U)
+                wind = st.to_section(rot_apply(sec["theta"], Ub))
+            else:
+                wind, s3, t = (st.to_section(vec[..., j, :]) for j in range(3))
+            W = wind - self._axial * s3 - self._swirl * t - st.to_section(sec["V"])
+            force, moment, _ = st.loads(W)
+            return st.from_section(force), st.from_section(moment)
+        return section_loads

@@ -23,17 +23,20 @@ from typing import Optional
 import numpy as np
 import scipy.sparse as sp
 
+from ..aero.wind import Wind
 from ..fem.beam import BeamElements
 from ..fem.sections import mesh_beam
 from ..model import Turbine
 from ..numerics.jacobian import STEP, ColouredJacobian, block_tridiagonal_pattern
 from ..rigid import RigidSystem
-from ..aero.wind import Wind
 from .layout import StateLayout
 from .rotor_aero import FrozenWakeRotor
 
 __all__ = ["TurbineModel"]
 
+
+#: Trailing dimensions of each entry of the blades' root data (FrozenWakeRotor.root_data).
+_AIR_TAIL = {"vectors": 2, "B": 2, "P": 1, "time": 0}
 
 #: Rigid coordinates of the drivetrain (hawt_core.rigid.kane): labelled "drivetrain".
 DRIVETRAIN_COORDINATES = ("shaft_twist", "generator_azimuth")
@@ -114,21 +117,43 @@ class TurbineModel:
                          ydot[self._tip_V], ydot[self._tip_Om]])
 
     def _air(self, q, t, tower=None):
-        """The blades' root-frame wind vectors (..., Nb, 3, 3) at the rigid coordinates q
-        (..., nq), times t (...) and tower-top state (FrozenWakeRotor.root_vectors); None in
-        a vacuum."""
+        """What the blades' aerodynamic loads need from the rigid coordinates q (..., nq) at
+        times t (...) and the tower-top state (FrozenWakeRotor.root_data: arrays with
+        leading dimensions (..., Nb)); None in a vacuum."""
         if self.aero is None:
             return None
         fr = self.rigid.frames(q, t, tower)
-        return self.aero.root_vectors(fr["B"], fr["S"])
+        P = self.rigid.root_points(q, t, tower) if self.aero.field else None
+        return self.aero.root_data(fr["B"], fr["S"], P, t)
+
+    @staticmethod
+    def _air_flat(air, rows):
+        """Root data (or None) with its leading dimensions (..., Nb) merged into ``rows``."""
+        if air is None:
+            return None
+        return {k: a.reshape((rows,) + a.shape[a.ndim - _AIR_TAIL[k]:]) for k, a in air.items()}
+
+    @staticmethod
+    def _air_tile(air, C):
+        """Flat root data (or None) repeated C times along the batch (colours)."""
+        if air is None:
+            return None
+        return {k: np.tile(a, (C,) + (1,) * (a.ndim - 1)) for k, a in air.items()}
+
+    @staticmethod
+    def _air_join(airs):
+        """Flat root data of several batches, concatenated (None in a vacuum)."""
+        if airs[0] is None:
+            return None
+        return {k: np.concatenate([a[k] for a in airs]) for k in airs[0]}
 
     def _blade_residual(self, ydb, yb, v, w, g, air):
         """Beam rows (K, nbl) of K blades at root motions v, w (K, 3), gravity g (K, 3) or
-        None and root-frame wind vectors ``air`` (K, 3, 3) or None (in a vacuum)."""
+        None and root data ``air`` (leading dimension K) or None (in a vacuum)."""
         if air is None:
             return self.beam.residual(ydb, yb, v, w, g)
-        return self.beam.residual(ydb, yb, v, w, g, wind=air,
-                                  section_loads=self.aero.section_loads)
+        return self.beam.residual(ydb, yb, v, w, g, wind=air["vectors"],
+                                  section_loads=self.aero.loads(air))
 
     def _tower_residual(self, ydt, yt, tip_loads, batch=1):
         """Tower beam rows (batch, n_t): clamped at the ground (root frame inertial, at rest),
@@ -167,7 +192,7 @@ class TurbineModel:
         air = self._air(q, t)
         rb = self._blade_residual(ydot[:, nr:].reshape(K * nb, nbl), yb.reshape(K * nb, nbl),
                                   v.reshape(K * nb, 3), w.reshape(K * nb, 3), g,
-                                  None if air is None else air.reshape(K * nb, 3, 3))
+                                  self._air_flat(air, K * nb))
         out = np.empty((K, self.n), dtype=rb.dtype)
         out[:, :nq] = self.rigid.kinematics(q, qd, u, t)
         out[:, nq:nr] = self.rigid.dynamics(q, u, ud, t, yb[:, :, 0:3], yb[:, :, 3:6])
@@ -268,10 +293,11 @@ class TurbineModel:
     def _blade_block_jacobians(self, v, w, g, air, yb, ydb, Jy_parts, Jd_parts):
         """Blade rows w.r.t. their own unknowns at the root motion (v, w), gravity g (Nb, 3)
         and root-frame wind vectors ``air`` (Nb, 3, 3) (see _block_jacobians)."""
-        rep = lambda a, C: None if a is None else np.tile(a, (C,) + (1,) * (a.ndim - 1))
+        rep = lambda a, C: None if a is None else np.tile(a, (C, 1))    # (C*nb, 3)
+        air = self._air_flat(air, self.n_blades)
         self._block_jacobians(
-            self._beam_jac, lambda Yd, Y, C: self._blade_residual(Yd, Y, rep(v, C), rep(w, C),
-                                                                   rep(g, C), rep(air, C)),
+            self._beam_jac, lambda Yd, Y, C: self._blade_residual(
+                Yd, Y, rep(v, C), rep(w, C), rep(g, C), self._air_tile(air, C)),
             yb, ydb, [self.layout.blade_offset(k) for k in range(self.n_blades)],
             Jy_parts, Jd_parts)
 
@@ -314,13 +340,12 @@ class TurbineModel:
             vj, wj = self.rigid.root_motion(x[:nq], x[nq:nr], t, twj)
             vs.append(vj), ws.append(wj)
             gs.append(self.rigid.gravity_in_root(x[:nq], t, twj) if self.gravity else None)
-            airs.append(self._air(x[:nq], t, twj))
+            airs.append(self._air_flat(self._air(x[:nq], t, twj), nb))
         nx = len(xcols)
         r = self._blade_residual(np.tile(ydb, (nx, 1)), np.tile(yb, (nx, 1)).astype(complex),
                                  np.concatenate(vs), np.concatenate(ws),
                                  np.concatenate(gs) if self.gravity else None,
-                                 np.concatenate(airs) if self.aero is not None else None
-                                 ).imag / h
+                                 self._air_join(airs)).imag / h
         r = r.reshape(nx, nb * nbl)
         rr, cc = np.nonzero(r.T)
         rows_y.append(nr + rr), cols_y.append(xcols[cc]), vals_y.append(r.T[rr, cc])
@@ -387,8 +412,7 @@ class TurbineModel:
         rb = self._blade_residual(np.tile(ydb, (M * nr, 1)),
                                   np.tile(yb, (M * nr, 1)).astype(complex),
                                   v.reshape(M * nr * nb, 3), w.reshape(M * nr * nb, 3), g,
-                                  None if air is None else air.reshape(M * nr * nb, 3, 3)
-                                  ).imag / h
+                                  self._air_flat(air, M * nr * nb)).imag / h
         y_cols = np.zeros((M, self.n, nr))
         y_cols[:, nr:] = rb.reshape(M, nr, nb * nbl).transpose(0, 2, 1)
         ydot_cols = np.zeros((M, self.n, nr))

@@ -241,6 +241,13 @@ def turbine_in_wind(args, turbine):
     from ..analyses.operating_points import operating_points
     U = float(args.wind)
     wind = Wind(U, direction=math.radians(args.wind_direction))
+    if getattr(args, "shear", 0.0):
+        if turbine.tower is None:
+            raise ValueError("--shear: the turbine has no tower, so no height above the "
+                             "ground; the power law needs one")
+        top = float(turbine.tower.length)          # N's origin: the tower top
+        wind = Wind(U, direction=wind.direction, shear_exponent=float(args.shear),
+                    origin_height=top, reference_height=top + turbine.nacelle.shaft_height)
     speed = args.rotor_speed
     pitch = None if args.pitch is None else math.radians(args.pitch)
     source = "given"
@@ -280,6 +287,9 @@ def wind_args(p):
     p.add_argument("--pitch", type=finite_float("--pitch", unit="deg"), default=None,
                    metavar="DEG", help="collective pitch [deg], positive towards feather "
                                        "(ElastoDyn's BlPitch)")
+    p.add_argument("--shear", type=finite_float("--shear", minimum=0.0), default=0.0,
+                   metavar="ALPHA", help="vertical power-law shear exponent (U at hub height; "
+                   "heights from the tower's length), e.g. 0.2")
     p.add_argument("--controller", default=None, metavar="DISCON.IN",
                    help="ROSCO controller file whose schedule sets the rotor speed and pitch "
                         "at --wind (default for nrel5mw and iea15mw: the rosco wheel's)")
@@ -289,6 +299,7 @@ def check_wind_args(args):
     """The --wind options' ranges (ValueError naming the flag)."""
     if args.wind is None:
         for flag, v in (("--wind-direction", args.wind_direction != 0.0),
+                        ("--shear", getattr(args, "shear", 0.0) != 0.0),
                         ("--pitch", args.pitch is not None),
                         ("--controller", args.controller is not None)):
             if v:
@@ -300,6 +311,8 @@ def check_wind_args(args):
     if not abs(args.wind_direction) < 90.0:
         raise ValueError(f"--wind-direction: {args.wind_direction!r} is not allowed; need "
                          "-90 < DEG < 90 (the rotor faces the wind)")
+    if not 0.0 <= getattr(args, "shear", 0.0) <= 1.0:
+        raise ValueError(f"--shear: {args.shear!r} is not allowed; need 0 to 1")
     if args.pitch is not None and not -90.0 <= args.pitch <= 90.0:
         raise ValueError(f"--pitch: {args.pitch!r} is not allowed; need -90 to 90 [deg]")
 

@@ -4,7 +4,8 @@ imported when the command runs, so that ``import hawt_core.cli`` stays cheap).
 
 from __future__ import annotations
 
-from .parser import command, elements_type, finite_float, load, step_deg_type, turbine_arg
+from .parser import (command, elements_type, finite_float, load, rotor_speed_type,
+                     step_deg_type, turbine_arg)
 from .status import ProgressLine
 
 
@@ -22,11 +23,17 @@ def cmd_simulate(args) -> int:
     perturb = parse_perturb(args.perturb)
     if args.output and not args.output.lower().endswith((".csv", ".npz")):
         raise ValueError(f"output: {args.output!r} is not allowed; need a .csv or .npz file")
+    from .aero import check_wind_args, turbine_in_wind
+    check_wind_args(args)
     turbine = load(args.turbine)
     if args.lock_yaw:
         from dataclasses import replace
         turbine = replace(turbine, nacelle=replace(turbine.nacelle, yaw_free=False))
-    model = TurbineModel(turbine, elements=args.elements)
+    wind = None
+    if args.wind is not None:
+        turbine, wind, _ = turbine_in_wind(args, turbine)
+    model = TurbineModel(turbine, elements=args.elements, wind=wind,
+                         rotor_speed=None if wind is not None else args.rotor_speed)
     sim = Simulator(model, step_deg=step_deg, perturb=perturb, record=bool(args.output),
                     method=args.method)
     status = ProgressLine(not args.quiet or args.progress, force=args.progress)
@@ -53,7 +60,12 @@ def cmd_simulate(args) -> int:
 
 @cmd_simulate.arguments
 def _simulate_args(p):
+    from .aero import wind_args
     turbine_arg(p)
+    wind_args(p)
+    p.add_argument("--rotor-speed", type=rotor_speed_type, default=None, metavar="RAD_PER_S",
+                   help="rotor speed [rad/s] (default: the file's; with --wind the "
+                        "schedule's)")
     p.add_argument("--duration", type=finite_float(), required=True, metavar="S",
                    help="simulated time [s]")
     p.add_argument("--step-deg", type=step_deg_type, default=1.0, metavar="DEG",

@@ -178,8 +178,11 @@ class BeamElements:
             unit length [N/m, N m/m] at the Gauss points (N, G, B, 3), section-frame (turned-b)
             components, acting at the reference line; ``sections`` is a dict of the Gauss-point
             arrays (N, G, B, 3) ``V``, ``Omega`` (section velocities), ``Vdot``,
-            ``Omegadot`` (their rates) and ``wind`` (the air velocity in the section frame,
-            None without ``wind``).  Aerodynamic loads enter the one residual this way.
+            ``Omegadot`` (their rates), ``position`` (the deformed reference line's point
+            relative to the root, root-frame b components [m]), ``theta`` (the rotation
+            parameters: numerics.rotations.rot_apply turns b components into the section
+            frame's) and ``wind`` (the air velocity in the section frame, None without
+            ``wind``).  Aerodynamic loads enter the one residual this way.
 
         Fused implementation (about 70 NumPy calls whatever B and N, every product a single
         BLAS call or N of them): Gauss-point arrays are laid out (element, Gauss point, beam,
@@ -275,6 +278,7 @@ class BeamElements:
         if section_loads is not None:
             force, moment = section_loads({
                 "V": Vg, "Omega": Omg, "Vdot": a[..., 18:21], "Omegadot": a[..., 21:24],
+                "position": ug + self._X0, "theta": thg,
                 "wind": (rT[..., nT - m_wind:, :] if several else rT[..., nT - 1, :])
                 if airy else None})
             t[..., 0:3] -= force

@@ -454,6 +454,14 @@ class RigidSystem:
         w = _mv(Bt, k["w_H"][..., None, :])
         return v, w
 
+    def root_points(self, q, t, tower=None):
+        """(..., Nb, 3): the blade-root points P_k relative to the tower-top point TY [m],
+        inertial components (a flexible tower's tip displacement not included: the caller
+        adds it where it matters)."""
+        fr = self.frames(q, t, tower)
+        rho = np.swapaxes(fr["H"] @ self.root_offset_hub.T, -1, -2)             # (..., Nb, 3)
+        return self.teeter_point(fr)[..., None, :] + rho
+
     def gravity_in_root(self, q, t, tower=None):
         """(Nb, 3): the gravity vector ``-g n1`` [m/s^2] in each blade's root basis b."""
         self._check_tower(tower)
