@@ -161,3 +161,16 @@ def test_turbine_flutter_sweep_finds_the_damping_crossing(tmp_path, capsys):
     assert out["flutter_rotor_speed"] == pytest.approx(r.flutter_speed, rel=1e-3)
     assert cli.main(["flutter", str(f), "-n", "2"]) != 0
     assert "--wind U and --rpm" in capsys.readouterr().err
+
+
+def test_simulate_command_in_wind(tmp_path, capsys):
+    """``hawt simulate FILE --wind U --rotor-speed W --pitch P``: runs from the steady state in
+    wind and reports a finite final state (the teeter angle of a symmetric rotor in axial wind
+    stays at its steady value, 0 within 1e-8 rad)."""
+    f = tmp_path / "rotor.yaml"
+    f.write_text(dump_turbine(teetering_rotor(stiffness=1.0)))
+    assert cli.main(["simulate", str(f), "--wind", "6", "--rotor-speed", "5", "--pitch", "0",
+                     "--duration", "0.5", "-n", "2", "--lock-yaw", "--json", "-q"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert abs(out["final"]["teeter"]) < 1e-8
+    assert out["simulated_seconds"] == pytest.approx(0.5, abs=0.05)

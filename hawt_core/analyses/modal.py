@@ -91,13 +91,6 @@ MAX_STEPS = 1_000_000
 MAX_SAMPLES = 512
 
 
-#: Periodic steady state in wind: residual between the collocation times relative to the
-#: load scale.  The airfoil tables are C1 (piecewise cubic in the angle of attack), so the
-#: orbit's Fourier series decays algebraically (NREL 5-MW at 8 m/s, 16 elements: 4e-7, 2e-6,
-#: 2e-8 with 4, 8, 16 harmonics, 1e-8 still at 32), not geometrically as in a vacuum (1e-8).
-AERO_INTERPOLATION_TOL = 1e-6
-
-
 class Cancelled(RuntimeError):
     """The analysis was cancelled through the ``cancel`` callback."""
 
@@ -368,9 +361,7 @@ def _modal_analysis(turbine, elements, rotor_speed, steps, method, fast, harmoni
                              "speed 0, no period to march over); use auto or hill")
         steady, dae = _standstill_dae(model)
     else:
-        steady = periodic_steady_state(
-            model, harmonics=harmonics,
-            **({} if wind is None else {"interpolation_tol": AERO_INTERPOLATION_TOL}))
+        steady = periodic_steady_state(model, harmonics=harmonics)
     timings["steady_state"] = time.perf_counter() - t0
     stage(0.2, "linearization")
     if not standstill:

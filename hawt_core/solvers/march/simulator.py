@@ -58,6 +58,11 @@ __all__ = ["Simulator", "SimulationError"]
 
 
 # ============================================================================ simulator
+#: A remainder of at most this fraction of a step at the end of a run lengthens the last step
+#: instead of becoming a tiny step of its own.
+TAIL_STRETCH = 0.01
+
+
 class Simulator(StepSolver, SimulationOutputs):
     """Implicit-midpoint time integration of a TurbineModel.
 
@@ -412,7 +417,8 @@ class Simulator(StepSolver, SimulationOutputs):
         return self._mid[-1][1].copy()
 
     def run(self, duration: float, progress: Optional[Callable] = None) -> dict:
-        """Integrate for ``duration`` seconds (the last step is shortened to land on it).
+        """Integrate for ``duration`` seconds (the last step is shortened to land on it, or
+        lengthened by up to TAIL_STRETCH of a step).
         ``progress(fraction, message)`` is called a few times per second. Returns summary()."""
         duration = check_number("duration", duration, minimum=0.0)
         t_end = self.t + duration
@@ -423,6 +429,10 @@ class Simulator(StepSolver, SimulationOutputs):
             # round-off counts as full (and keeps the window's step size)
             self._steps_wanted = int(math.floor((t_end - self.t) / self.h
                                                 + 1e-9 * max(1.0, abs(t_end))))
+            if self._steps_wanted == 1 and t_end - self.t < (1 + TAIL_STRETCH) * self.h:
+                # a remainder below TAIL_STRETCH steps joins the last step (a step of a
+                # millionth of h is ill-conditioned: the DAE's algebraic rows scale as 1/h)
+                self._steps_wanted = 0
             if self._steps_wanted == 0:
                 keep = self.h
                 self.h = t_end - self.t
