@@ -45,6 +45,7 @@ from typing import Callable, Optional, Sequence
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
+from ..assembly.rotor_aero import DESCRIPTION as FROZEN_WAKE
 from ..model import Turbine
 from ..numerics.mac import mac_matrix
 from ..results.campbell import FRAMES, CampbellResult, Track
@@ -509,7 +510,7 @@ def campbell(turbine: Turbine, speeds, elements: Optional[int] = None,
     extra = None if wind is None else {
         "wind_speed": float(wind.speed), "wind_direction_deg": float(np.degrees(wind.direction)),
         "air_density": rho, "pitch_deg": float(np.degrees(-turbine.rotor.pitch)),
-        "aerodynamics": "blade-element momentum, frozen wake"}
+        "aerodynamics": FROZEN_WAKE}
     return _assemble(turbine, arr, results, failures, errors, max_hz, frame, workers, t0,
                      extra=extra)
 
@@ -647,4 +648,4 @@ def campbell_in_wind(turbine: Turbine, wind_speeds, schedule: dict,
                          "wind_speeds": winds.tolist(), "air_density": rho,
                          "wind_direction_deg": float(np.degrees(direction)),
                          "pitch_deg": [p["pitch_deg"] for p in op],
-                         "aerodynamics": "blade-element momentum, frozen wake"})
+                         "aerodynamics": FROZEN_WAKE})

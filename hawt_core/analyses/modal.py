@@ -35,6 +35,7 @@ from scipy.optimize import linear_sum_assignment
 
 from ..aero.wind import Wind
 from ..assembly import TurbineModel
+from ..assembly.rotor_aero import DESCRIPTION as FROZEN_WAKE
 from ..model import Turbine
 from ..numerics.checks import check_elements, check_rotor_speed
 from ..numerics.limits import MAX_ELEMENTS
@@ -421,8 +422,7 @@ def _modal_analysis(turbine, elements, rotor_speed, steps, method, fast, harmoni
                          "wind_direction_deg": float(np.degrees(wind.direction)),
                          "air_density": float(rho),
                          "pitch_deg": float(np.degrees(-turbine.rotor.pitch)),
-                         "aerodynamics": "blade-element momentum (Prandtl tip/hub loss, Buhl), "
-                                         "frozen wake, quasi-steady airfoils",
+                         "aerodynamics": FROZEN_WAKE,
                          "mean_axial_induction": float(np.mean(a))})
     total = time.perf_counter() - t0
     timings["total"] = total

@@ -42,7 +42,14 @@ from ..numerics.newton import newton
 from ..fem.beam import BLOCK_SIZE, ROOT_F, ROOT_M, U_
 from .spinning_blade import SpinningBlade
 
-__all__ = ["AeroelasticBlade"]
+__all__ = ["AeroelasticBlade", "distance_from_shaft"]
+
+
+def distance_from_shaft(turbine: Turbine, x) -> np.ndarray:
+    """Distance [m] from the shaft axis of the points at span ``x`` [m] of the undeformed
+    blade: the root point is at the hub radius e in the hub plane (rigid/kane.py) and the
+    coned blade axis b1 leaves it, so e + x cos(precone)."""
+    return turbine.hub.radius + np.asarray(x) * np.cos(turbine.rotor.precone)
 
 
 class AeroelasticBlade:
@@ -82,14 +89,11 @@ class AeroelasticBlade:
         # element section frames (pitch; a curved line's turn) in b: the unknowns are in
         # components of b turned by the elastic rotation, the airfoil lives in these frames
         self.strips = BladeStrips(aero, xg / L, self.beam.props.element_frames(), rho)
-        # the root point is at the hub radius e in the hub plane (rigid/kane.py); the coned
-        # blade axis b1 leaves it: distance from the shaft e + x cos(precone) [m]
-        self.r = (e + xg * self.cos_cone)[:, :, None]
-        self.hub_radius = float(e)
+        self.r = distance_from_shaft(turbine, xg)[:, :, None]
         #: the root point relative to the shaft axis in the root frame b: e a1 (unconed)
         self.root_lever = e * np.array([np.cos(beta), 0.0, -np.sin(beta)])
-        self.hub_r = float(e)
-        self.tip_r = e + L * self.cos_cone
+        self.hub_r = float(distance_from_shaft(turbine, 0.0))
+        self.tip_r = float(distance_from_shaft(turbine, L))
         # shaft axis and direction of motion in the root frame b (precone about b2)
         self.axes = np.array([[np.sin(beta), 0.0, np.cos(beta)], [0.0, 1.0, 0.0]])
         N, G = xg.shape

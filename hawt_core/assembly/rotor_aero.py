@@ -39,9 +39,14 @@ from ..aero.strip import BladeStrips
 from ..aero.wind import Wind
 from ..model import Turbine
 from ..numerics.rotations import rot_apply
-from .aero_blade import AeroelasticBlade
+from .aero_blade import AeroelasticBlade, distance_from_shaft
 
 __all__ = ["FrozenWakeRotor"]
+
+
+#: What the model is, in a result's settings.
+DESCRIPTION = ("blade-element momentum (Prandtl tip/hub loss, Buhl), frozen wake, "
+               "quasi-steady airfoils")
 
 
 class FrozenWakeRotor:
@@ -76,10 +81,9 @@ class FrozenWakeRotor:
         if not self.normal_speed > 0:
             raise ValueError(f"wind.direction: {wind.direction!r} is not allowed; the wind must "
                              "blow through the rotor from upwind (|direction| < 90 deg)")
-        L, e = turbine.blade.length, turbine.hub.radius
+        L = turbine.blade.length
         xg = beam.xg
-        # distance from the shaft [m]: the root point at e in the hub plane, the coned axis
-        self.r = (e + xg * np.cos(turbine.rotor.precone))[:, :, None]
+        self.r = distance_from_shaft(turbine, xg)[:, :, None]
         self.strips = BladeStrips(aero, xg / L, beam.props.element_frames(), rho)
         self.blade_state = None
         if inductions is None:

@@ -93,6 +93,7 @@ class TurbineModel:
             self._tower_jac = ColouredJacobian(
                 block_tridiagonal_pattern(self.tower.pattern_blocks()))
         self._reference_jac = None  # built on first use by jacobians_reference (tests only)
+        self._load_scale = None     # computed on first use by load_scale
         self._beam_jac = ColouredJacobian(block_tridiagonal_pattern(self.beam.pattern_blocks()))
 
     def with_turbine(self, turbine: Turbine) -> "TurbineModel":
@@ -292,7 +293,7 @@ class TurbineModel:
 
     def _blade_block_jacobians(self, v, w, g, air, yb, ydb, Jy_parts, Jd_parts):
         """Blade rows w.r.t. their own unknowns at the root motion (v, w), gravity g (Nb, 3)
-        and root-frame wind vectors ``air`` (Nb, 3, 3) (see _block_jacobians)."""
+        and the blades' root data ``air`` (_air; None in a vacuum) (see _block_jacobians)."""
         rep = lambda a, C: None if a is None else np.tile(a, (C, 1))    # (C*nb, 3)
         air = self._air_flat(air, self.n_blades)
         self._block_jacobians(
@@ -454,33 +455,34 @@ class TurbineModel:
         return Jd, -Jy
 
     # ------------------------------------------------------------------ steady state
-    def initial_guess(self) -> np.ndarray:
-        """Rigid coordinates and speeds zero; blades in rigid rotation with the hub."""
+    def _rigid_rotation_state(self) -> np.ndarray:
+        """Rigid coordinates and speeds zero; blades undeformed in rigid rotation with the
+        hub; a flexible tower at rest, undeformed (zeros)."""
         y = np.zeros(self.n)
-        q, u = np.zeros(self.nq), np.zeros(self.nu)
-        v, w = self.rigid.root_motion(q, u, 0.0)
+        v, w = self.rigid.root_motion(np.zeros(self.nq), np.zeros(self.nu), 0.0)
         for k in range(self.n_blades):
             off = self.layout.blade_offset(k)
-            # in wind: the blade's own aeroelastic steady state on the spinning hub
-            y[off:off + self.beam.n] = (
-                self.aero.blade_state if self.aero is not None and self.aero.blade_state
-                is not None else self.beam.rigid_body_state(np.real(v[k]), np.real(w[k])))
-        return y  # a flexible tower starts at rest, undeformed (zeros)
+            y[off:off + self.beam.n] = self.beam.rigid_body_state(np.real(v[k]), np.real(w[k]))
+        return y
+
+    def initial_guess(self) -> np.ndarray:
+        """The rigid rotation (_rigid_rotation_state); in wind every blade in the blade's
+        own aeroelastic steady state on the spinning hub."""
+        y = self._rigid_rotation_state()
+        if self.aero is not None and self.aero.blade_state is not None:
+            for k in range(self.n_blades):
+                off = self.layout.blade_offset(k)
+                y[off:off + self.beam.n] = self.aero.blade_state
+        return y
 
     def load_scale(self) -> float:
         """The scale [N] of the loads a steady state balances: the largest residual (at
         least 1) of the blades turning undeformed with the hub, rigid coordinates zero, at
         t = 0 (centrifugal, gravity and aerodynamic loads against unloaded sections); the
         steady-state solvers' tolerances are relative to it."""
-        if getattr(self, "_load_scale", None) is None:
-            y = np.zeros(self.n)
-            v, w = self.rigid.root_motion(np.zeros(self.nq), np.zeros(self.nu), 0.0)
-            for k in range(self.n_blades):
-                off = self.layout.blade_offset(k)
-                y[off:off + self.beam.n] = self.beam.rigid_body_state(np.real(v[k]),
-                                                                      np.real(w[k]))
-            self._load_scale = max(1.0, float(np.abs(self.residual(np.zeros(self.n), y,
-                                                                   0.0)).max()))
+        if self._load_scale is None:
+            r = self.residual(np.zeros(self.n), self._rigid_rotation_state(), 0.0)
+            self._load_scale = max(1.0, float(np.abs(r).max()))
         return self._load_scale
 
     def display_rows(self):

@@ -18,11 +18,14 @@ CHORD_CONTRACTION = 0.05
 
 
 def newton(fun, jac, y0, tol=1e-9, max_iter=30, what="steady state", fixed=None,
-           linear_solve=None, reuse_jacobian: bool = False, scale=None):
+           linear_solve=None, reuse_jacobian: bool = False, scale=None,
+           min_scale: float = 1.0):
     """Newton's method with a sparse LU; ``tol`` is relative to the first residual's scale
     (or to ``scale`` when given: a warm start's small first residual would otherwise ask for
     a tolerance below the residual's round-off; an array gives each row its own scale, for
     rows of different units, and the solve converges on the rows divided by it).
+    ``min_scale``: a floor under the first residual's scale (the loads a warm start must
+    still balance to round-off), when ``scale`` is not given.
 
     ``reuse_jacobian``: keep the Jacobian (and its factors) while each step shrinks the
     largest residual by at least CHORD_CONTRACTION (the chord method; a weakly nonlinear
@@ -43,7 +46,7 @@ def newton(fun, jac, y0, tol=1e-9, max_iter=30, what="steady state", fixed=None,
     y = np.array(y0, dtype=float)
     r = fun(y)
     if scale is None:
-        scale = max(1.0, np.max(np.abs(r)))
+        scale = max(1.0, float(min_scale), np.max(np.abs(r)))
     elif np.ndim(scale):                  # one scale per row: rows of different units
         r_unit = np.maximum(np.asarray(scale, float), 1e-300)
         base_fun = fun

@@ -232,10 +232,6 @@ def _harmonic_balance(model, harmonics, tol, max_iter, progress, guess) -> Perio
     n = model.n
     Y = np.tile(model.initial_guess(), (M, 1)) if guess is None \
         else np.array([guess.at(t) for t in times])
-    r0 = np.concatenate([model.residual(D[j] @ Y, Y[j], times[j]) for j in range(M)])
-    # the tolerance's scale: the loads the state balances (a warm start's small first
-    # residual would ask for less than the round-off of the blade-root rows)
-    scale = max(np.abs(r0).max(), model.load_scale())
     KD = sp.kron(sp.csr_matrix(D), sp.identity(n), format="csr")
 
     def residual(Yflat):
@@ -273,7 +269,11 @@ def _harmonic_balance(model, harmonics, tol, max_iter, progress, guess) -> Perio
     ign = ignorable_columns(model.jacobians(np.zeros(n), Y[0], times[0])[0])
     Yflat, it = newton(residual, jacobian, Y.ravel(), tol=tol, max_iter=max_iter,
                        what=f"periodic steady state (harmonic balance, {harmonics} harmonics)",
-                       fixed=ign, linear_solve=krylov, scale=scale,
+                       fixed=ign, linear_solve=krylov,
+                       # the tolerance's scale at least the loads the state balances (a warm
+                       # start's small first residual would ask for less than the round-off
+                       # of the blade-root rows)
+                       min_scale=model.load_scale(),
                        # the chord method where each Jacobian is dear (GMRES-sized systems);
                        # small ones keep Newton's quadratic last step (a steady state far
                        # below the tolerance, whose symmetry Fast Floquet relies on)
