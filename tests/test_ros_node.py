@@ -349,7 +349,8 @@ def test_publishes_joint_states_blades_markers_at_rate(spawn):
     first_message(node, js)
     start = len(js)
     rate, window = publish_rate(js, start, 3.0, node)        # a 3 s window
-    msgs = js.msgs()
+    received = js.snapshot()            # one snapshot: the stamps and receive times agree
+    msgs = [m for _, _, m in received]
     stamps = [stamp_ns(m.header.stamp) for m in msgs]
     # the node's own rate: its wall-clock stamps (the receive times also hold the test
     # process's scheduling, which a long suite on two cores crowds)
@@ -364,8 +365,9 @@ def test_publishes_joint_states_blades_markers_at_rate(spawn):
     for arr in (m.position, m.velocity, m.effort):
         assert len(arr) == 3 and all(math.isfinite(x) for x in arr)
     assert m.velocity[2] == pytest.approx(6.02)
-    # ROS (wall-clock) stamps when real_time_factor > 0
-    recv_wall = js.snapshot()[-1][1]
+    # ROS (wall-clock) stamps when real_time_factor > 0: the last message's stamp against
+    # the wall clock when it arrived (the same message; a later snapshot's newest one is not)
+    recv_wall = received[-1][1]
     assert abs(recv_wall - stamps[-1]) < 2e9
     # one BladeDeflection per blade per publish, with the same stamps as joint_states
     wait_until(lambda: len(bd) >= 2 * len(msgs) - 4, 3.0, what="blade deflections")
