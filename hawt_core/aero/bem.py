@@ -30,7 +30,7 @@ import numpy as np
 from .polars import StationPolars
 
 __all__ = ["BemRotor", "BemSolution", "axial_induction", "momentum_thrust",
-           "induction_from_thrust"]
+           "induction_from_thrust", "prandtl_loss", "quasi_steady_inductions"]
 
 #: Axial induction above which Buhl's correction replaces momentum theory (k = 2/3).
 BUHL_INDUCTION = 0.4
@@ -61,6 +61,37 @@ def induction_from_thrust(ct, F=1.0):
     disc = np.where(np.real(disc) > 0, disc, 0.0)
     high = (-qb + np.sqrt(disc)) / (2.0 * qa)
     return np.where(np.real(ct) <= np.real(switch), low, high)
+
+
+def prandtl_loss(blades, r, tip_radius, hub_radius, sin_phi, tip=True, hub=True):
+    """Prandtl's tip and hub loss factor F (product of the two) at radii ``r`` [m] for the
+    inflow angle's |sin phi| ``sin_phi`` (rotor frame), complex-step safe (no clipping: for
+    r inside (hub, tip) and sin phi > 0 the exponentials are in (0, 1))."""
+    F = np.ones_like(sin_phi)
+    if tip:
+        F = F * (2 / np.pi) * np.arccos(np.exp(-0.5 * blades * (tip_radius - r) / (r * sin_phi)))
+    if hub:
+        F = F * (2 / np.pi) * np.arccos(np.exp(-0.5 * blades * (r - hub_radius)
+                                               / (hub_radius * sin_phi)))
+    return F
+
+
+def quasi_steady_inductions(blades, thrust, drive, a, F, r, rho, wind_speed, rotor_speed,
+                            cos_cone=1.0):
+    """(a_qs, a'_qs): the inductions whose annulus momentum balances the blades' loads, from
+    one blade's thrust (along the shaft) and driving force (along its motion) per unit blade
+    length [N/m] at radius r [m] (``blades`` equal blades; the blade length along a coned
+    axis is the annulus width over cos(precone)), the current axial induction ``a`` (in the
+    swirl balance), the loss factor F, density ``rho``, the rotor-normal wind speed and the
+    rotor speed [rad/s]:
+
+        momentum_thrust(a_qs, F) rho U^2 / 2 2 pi r = B thrust / cos(precone)
+        4 a'_qs (1 - a) F rho U Omega pi r^3 = B drive r / cos(precone)."""
+    ann = 2 * np.pi * r * 0.5 * rho * wind_speed * wind_speed
+    a_qs = induction_from_thrust(blades * thrust / cos_cone / ann, F)
+    ap_qs = blades * drive / cos_cone / (4 * (1 - a) * F * rho * wind_speed * rotor_speed
+                                         * np.pi * r * r)
+    return a_qs, ap_qs
 
 
 def axial_induction(k, F, phi_positive=True):

@@ -47,22 +47,32 @@ class BladeStrips:
         """Section-frame B components (N, G, B, 3) -> turned-b components."""
         return np.einsum("ngbij,ngbj->ngbi", self.frames, x)
 
-    def loads(self, W):
+    def angle_of_attack(self, W):
+        """(alpha [rad], chord-plane speed [m/s]) (N, G, B) of the relative air velocity
+        ``W`` (N, G, B, 3) [m/s] in section-frame components."""
+        W2, W3 = W[..., 1], W[..., 2]
+        return atan2(W3, -W2) + self.tau, np.sqrt(W2 * W2 + W3 * W3)
+
+    def loads(self, W, alpha=None):
         """Force and moment per unit length [N/m, N m/m] (N, G, B, 3) in section-frame
         components from the relative air velocity ``W`` (N, G, B, 3) [m/s] in section-frame
-        components, and a dict of the Gauss-point arrays (N, G, B): ``alpha`` [rad], ``w``
-        (the chord-plane speed [m/s]), ``cl``, ``cd``."""
+        components, and a dict of the Gauss-point arrays (N, G, B): ``alpha`` [rad] (the
+        angle the coefficients were read at), ``w`` (the chord-plane speed [m/s]), ``cl``,
+        ``cd``.  ``alpha``: the angle of attack at which to read the polars (N, G, B), e.g.
+        an unsteady-airfoil model's effective angle; default W's own (quasi-steady); lift
+        stays normal to W, drag along it."""
         W2, W3 = W[..., 1], W[..., 2]
         w2 = W2 * W2 + W3 * W3
         w = np.sqrt(w2)
-        alpha = atan2(W3, -W2) + self.tau
+        if alpha is None:
+            alpha = atan2(W3, -W2) + self.tau
         B = alpha.shape[2]
         cl, cd, cm = self.polars.coefficients(alpha.transpose(2, 0, 1).reshape(B, -1))
         cl, cd, cm = (c.reshape(B, *alpha.shape[:2]).transpose(1, 2, 0) for c in (cl, cd, cm))
         qc = 0.5 * self.rho * w2 * self.chord
-        force = np.zeros(W.shape, dtype=W.dtype)
+        force = np.zeros(W.shape, dtype=np.result_type(W, alpha))
         force[..., 1] = qc * (cl * W3 + cd * W2) / w
         force[..., 2] = qc * (-cl * W2 + cd * W3) / w
-        moment = np.zeros(W.shape, dtype=W.dtype)
+        moment = np.zeros(W.shape, dtype=force.dtype)
         moment[..., 0] = qc * self.chord * cm
         return force, moment, {"alpha": alpha, "w": w, "cl": cl, "cd": cd}

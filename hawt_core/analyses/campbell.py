@@ -45,7 +45,7 @@ from typing import Callable, Optional, Sequence
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from ..assembly.rotor_aero import DESCRIPTION as FROZEN_WAKE
+from ..assembly.rotor_aero import description as aero_description
 from ..model import Turbine
 from ..numerics.mac import mac_matrix
 from ..results.campbell import FRAMES, CampbellResult, Track
@@ -109,7 +109,8 @@ def campbell_point(task: dict) -> dict:
     """One rotor speed: modal analysis and the plain-data summary used by :func:`campbell`.
 
     ``task``: ``{"turbine": Turbine, "speed": float [rad/s], "elements", "steps", "method",
-    "parent_pid": int}``, and for a sweep in wind ``"wind"`` (aero.wind.Wind), ``"rho"`` and
+    "parent_pid": int}``, and for a sweep in wind ``"wind"`` (aero.wind.Wind), ``"rho"``,
+    ``"inflow"``, ``"airfoil"`` (modal_analysis's) and
     ``"abscissa"`` (the wind speed: the sweep's variable, default the rotor speed).  Top-level and picklable (the analysis limits its BLAS threads
     itself: hawt_core.threads).
 
@@ -125,7 +126,9 @@ def campbell_point(task: dict) -> dict:
         res = modal_analysis(task["turbine"], elements=task.get("elements"),
                              rotor_speed=float(task["speed"]), steps=task.get("steps"),
                              method=task.get("method"), max_per_rev=task.get("max_per_rev"),
-                             wind=task.get("wind"), rho=task.get("rho", 1.225))
+                             wind=task.get("wind"), rho=task.get("rho", 1.225),
+                             inflow=task.get("inflow", "frozen"),
+                             airfoil=task.get("airfoil", "quasi-steady"))
     band = task.get("max_hz")
     if band is not None:        # one band in Hz for the whole sweep, in the sweep's frame
         fixed = task.get("frame") == "fixed"
@@ -480,7 +483,8 @@ def campbell(turbine: Turbine, speeds, elements: Optional[int] = None,
              executor: Optional[cf.Executor] = None,
              progress: Optional[Callable[[float, str], None]] = None,
              errors: str = "skip", frame: Optional[str] = None,
-             max_hz: Optional[float] = None, wind=None, rho: float = 1.225) -> CampbellResult:
+             max_hz: Optional[float] = None, wind=None, rho: float = 1.225,
+             inflow: str = "frozen", airfoil: str = "quasi-steady") -> CampbellResult:
     """Floquet modal analysis of ``turbine`` at every rotor speed of ``speeds`` [rad/s]
     (run as :func:`campbell_point` tasks on ``executor``; default a ProcessPoolExecutor with
     ``os.cpu_count()`` workers, shut down afterwards; a given executor is left running), modes
@@ -495,8 +499,9 @@ def campbell(turbine: Turbine, speeds, elements: Optional[int] = None,
     state that does not converge): that point gets no modes and an ``"error"`` message
     (``CampbellResult.failed``); if every speed fails the first error is raised.  "raise"
     raises the first failure.  ``wind`` (aero.wind.Wind): every speed in that wind at the
-    turbine's pitch (frozen wake, inductions of each rotor speed's own BEM state; air density
-    ``rho``): the overspeed sweep of a turbine flutter analysis."""
+    turbine's pitch (inductions of each rotor speed's own BEM state; air density ``rho``;
+    ``inflow``, ``airfoil``: modal_analysis's): the overspeed sweep of a turbine flutter
+    analysis."""
     frame = _check_sweep(turbine, errors, frame)
     arr = np.sort(check_speeds(speeds))
     validate_request(elements, None, steps, method)
@@ -504,13 +509,14 @@ def campbell(turbine: Turbine, speeds, elements: Optional[int] = None,
     max_hz = float(max_hz)
     t0 = time.perf_counter()
     tasks = [{"turbine": turbine, "speed": float(w), "elements": elements, "method": method,
-              "wind": wind, "rho": rho, **_band(w, march, base, max_hz, frame)} for w in arr]
+              "wind": wind, "rho": rho, "inflow": inflow, "airfoil": airfoil,
+              **_band(w, march, base, max_hz, frame)} for w in arr]
     results, failures, workers = _run(tasks, executor, progress, "speeds",
                                       lambda i: f"{arr[i]:.4g} rad/s done", errors)
     extra = None if wind is None else {
         "wind_speed": float(wind.speed), "wind_direction_deg": float(np.degrees(wind.direction)),
         "air_density": rho, "pitch_deg": float(np.degrees(-turbine.rotor.pitch)),
-        "aerodynamics": FROZEN_WAKE}
+        "aerodynamics": aero_description(inflow, airfoil)}
     return _assemble(turbine, arr, results, failures, errors, max_hz, frame, workers, t0,
                      extra=extra)
 
@@ -597,10 +603,11 @@ def campbell_in_wind(turbine: Turbine, wind_speeds, schedule: dict,
                      progress: Optional[Callable[[float, str], None]] = None,
                      errors: str = "skip", frame: Optional[str] = None,
                      max_hz: Optional[float] = None, rho: float = 1.225,
-                     direction: float = 0.0) -> CampbellResult:
+                     direction: float = 0.0, inflow: str = "frozen",
+                     airfoil: str = "quasi-steady") -> CampbellResult:
     """The aeroelastic Campbell diagram: at every wind speed [m/s] of ``wind_speeds`` the
     operating point of ``schedule`` (analyses/operating_points.py: rotor speed and pitch),
-    then the Floquet analysis in that wind (modal_analysis(wind=...): frozen wake) as a
+    then the Floquet analysis in that wind (modal_analysis(wind=..., inflow=..., airfoil=...)) as a
     :func:`campbell_point` task on ``executor``; modes tracked along the wind speed.  The
     result's ``speeds`` are the rotor speeds [rad/s] of the points, ``wind_speeds`` the
     wind speeds; ``direction`` [rad]: the wind's yaw misalignment.  Other arguments as
@@ -628,7 +635,8 @@ def campbell_in_wind(turbine: Turbine, wind_speeds, schedule: dict,
                                            pitch=-np.radians(p["pitch_deg"])))
         tasks.append({"turbine": t, "speed": float(speeds[i]), "elements": elements,
                       "method": method, "wind": Wind(float(winds[i]), direction=direction),
-                      "rho": rho, "abscissa": float(winds[i]),
+                      "rho": rho, "inflow": inflow, "airfoil": airfoil,
+                      "abscissa": float(winds[i]),
                       **_band(speeds[i], march, base, max_hz, frame)})
         where.append(i)
     if not tasks:
@@ -648,4 +656,4 @@ def campbell_in_wind(turbine: Turbine, wind_speeds, schedule: dict,
                          "wind_speeds": winds.tolist(), "air_density": rho,
                          "wind_direction_deg": float(np.degrees(direction)),
                          "pitch_deg": [p["pitch_deg"] for p in op],
-                         "aerodynamics": FROZEN_WAKE})
+                         "aerodynamics": aero_description(inflow, airfoil)})

@@ -99,7 +99,11 @@ def label_modes(model: TurbineModel, fl, columns) -> list:
             else:
                 rig_name = ("teeter" if rigid.get("teeter", 0.0) >= 0.25 * rigid.get("yaw", 0.0)
                             else "yaw")
-        if rig_name == "tower":
+        aero_kind = _aerodynamic_state(model, fl, i, x)
+        if aero_kind is not None:        # the blades' inflow or lag states, not a structure's
+            rig_name = "aerodynamic"
+            family, symmetry, phase = "aerodynamic", aero_kind, None
+        elif rig_name == "tower":
             family, symmetry, phase = "tower", tower_dir, None
         elif rig_name is not None:
             family, symmetry, phase = rig_name, None, None
@@ -119,6 +123,47 @@ def label_modes(model: TurbineModel, fl, columns) -> list:
                                              energy)}},
                           column=int(i)))
     return modes
+
+
+#: A mode is one of the blades' inflow states when its largest induction state exceeds this
+#: many times its largest structural motion as a fraction of the rotor radius.
+AERODYNAMIC_SHARE = 10.0
+#: ... or exceeds it once in a mode that does not oscillate: frequency within this fraction of
+#: the frame's base frequency from a multiple of it.
+NON_OSCILLATORY = 1e-3
+
+
+def _aerodynamic_state(model: TurbineModel, fl, i: int, x) -> Optional[str]:
+    """"inflow" or "airfoil" for a mode of the blades' aerodynamic states (assembly/
+    rotor_aero.py: Oye's inflow, Jones's lag), else None: the largest induction state of its
+    vector (dimensionless) exceeds AERODYNAMIC_SHARE times its largest structural motion as
+    a fraction of the rotor radius (elastic and rigid tip metres over R), or the largest
+    aerodynamic state (inductions, lag angles in rad) exceeds that motion in a
+    non-oscillatory mode (an inflow mode with the flap it drags); named by the state group
+    that moves most."""
+    if not getattr(model, "n_aero", 0):
+        return None
+    lay = model.layout
+    names = model.aero.state_names
+    groups = {"inflow": [n for n in names if not n.startswith("alpha")],
+              "airfoil": [n for n in names if n.startswith("alpha")]}
+    size = {g: max([float(np.abs(x[lay.aero_states_of(k, n)]).max())
+                    for k in range(model.n_blades) for n in ns] or [0.0])
+            for g, ns in groups.items()}
+    rows, wts = model.display_rows()
+    R = model.turbine.hub.radius + model.turbine.blade.length
+    structure = float(np.abs(x[rows] * wts).max()) / R
+    kind = max(size, key=size.get)
+    # the inflow states alone: the lag states of a structural mode follow its section
+    # velocities (alpha ~ hdot / (Omega r)), large in a fast mode whatever its structure
+    if size["inflow"] > AERODYNAMIC_SHARE * structure:
+        return "inflow"
+    # a non-oscillatory mode (frequency a multiple of the frame's within NON_OSCILLATORY of
+    # it) led by its aerodynamic states: an inflow mode dragging the flap along
+    eta, w = complex(fl.exponents[i]), float(fl.omega)
+    off = abs(eta.imag - w * round(eta.imag / w)) if w > 0 else abs(eta.imag)
+    steady = off <= NON_OSCILLATORY * max(w, 1e-12)
+    return kind if steady and size[kind] > structure else None
 
 
 #: Exponents within this (relative) of each other form a degenerate cluster whose basis
@@ -229,6 +274,10 @@ def _family_rows(model: TurbineModel, family: str, blade: Optional[int] = None):
     if family == "tower":
         tl = lay.tower()
         return (list(tl.u[-1]) + list(tl.theta[-1]), [1.0] * 3 + [R] * 3)
+    if family == "aerodynamic":         # the blades' inflow and lag states
+        rows = [int(r) for k in (range(model.n_blades) if blade is None else [blade])
+                for nm in lay.aero_states for r in lay.aero_states_of(k, nm).ravel()]
+        return rows, [1.0] * len(rows)
     sec = model.turbine.blade.sections
     scale = {"L": model.turbine.blade.length,
              "r_g": float(np.sqrt(np.mean(sec.i1) / np.mean(sec.mass)))}
@@ -338,10 +387,13 @@ def add_fixed_frame(model, transform, fl, modes, rows, wts):
     motion that names it (as its rotating-frame frequency does: hawt_core.modal
     FAMILY_ROWS), the whirl of a yaw, teeter or tower mode from all blade motion."""
     blade_rows = [(r, w) for r, w in zip(rows, wts) if r >= model.layout.blade_offset(0)
-                  and r < model.layout.blade_offset(0) + model.n_blades * model.beam.n]
+                  and r < model.layout.blade_offset(0) + model.n_blades * model.blade_size]
     br, bw = [r for r, _ in blade_rows], [w for _, w in blade_rows]
     specs = {}
     for m in modes:
+        if m.family == "aerodynamic":       # its states are not sampled: the blades' motion
+            specs[m.column] = (br, bw, br, bw)
+            continue
         fr, fw = _family_rows(model, m.family)
         specs[m.column] = (fr, fw, fr, fw) if m.family in FAMILY_ROWS else (fr, fw, br, bw)
     ff = fixed_frame_modes(transform, fl, specs)
@@ -353,7 +405,7 @@ def add_fixed_frame(model, transform, fl, modes, rows, wts):
         m.fixed_frame_damping_ratio = x["damping_ratio"]
         m.whirl = f.whirl
         m.cyclic_order = f.order
-        if m.family not in ("yaw", "teeter", "tower"):
+        if m.family not in ("yaw", "teeter", "tower", "aerodynamic"):
             sym = _WHIRL_SYMMETRY[f.whirl]
             if f.whirl in ("forward", "backward") and f.order > 1:
                 sym = f"{sym}-{f.order}"

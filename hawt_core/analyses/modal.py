@@ -35,7 +35,6 @@ from scipy.optimize import linear_sum_assignment
 
 from ..aero.wind import Wind
 from ..assembly import TurbineModel
-from ..assembly.rotor_aero import DESCRIPTION as FROZEN_WAKE
 from ..model import Turbine
 from ..numerics.checks import check_elements, check_rotor_speed
 from ..numerics.limits import MAX_ELEMENTS
@@ -316,7 +315,8 @@ def modal_analysis(turbine: Turbine, elements: Optional[int] = None,
                    harmonics: int = 8, max_per_rev: Optional[float] = None,
                    progress: Optional[Callable[[float, str], None]] = None,
                    cancel: Optional[Callable[[], bool]] = None,
-                   wind: Optional[Wind] = None, rho: float = 1.225) -> ModalResult:
+                   wind: Optional[Wind] = None, rho: float = 1.225,
+                   inflow: str = "frozen", airfoil: str = "quasi-steady") -> ModalResult:
     """Floquet modal analysis of ``turbine``; overrides for elements, rotor speed [rad/s],
     marching steps per period, method (METHODS; default "auto": multi-blade coordinates where
     they make the system time-invariant, otherwise Radau IIA) and ``max_per_rev`` (the band
@@ -324,18 +324,20 @@ def modal_analysis(turbine: Turbine, elements: Optional[int] = None,
     of the periodic steady state.  Three or more blades: every mode also carries its
     fixed-frame frequency and whirl.  ``progress(fraction, message)`` is called between
     stages; ``cancel()`` returning True raises Cancelled.  ``wind`` (aero.wind.Wind): the
-    aeroelastic analysis in that steady wind (blade-element loads, frozen wake: see
-    assembly/rotor_aero.py; air density ``rho`` [kg/m^3]) at the given rotor speed and the
-    turbine's pitch; None: in a vacuum."""
+    aeroelastic analysis in that steady wind (blade-element loads: see
+    assembly/rotor_aero.py; air density ``rho`` [kg/m^3]; ``inflow`` "frozen" (wake) or
+    "oye" (dynamic inflow states), ``airfoil`` "quasi-steady" or "jones" (unsteady-airfoil
+    states)) at the given rotor speed and the turbine's pitch; None: in a vacuum."""
     method = method or "auto"
     validate_request(elements, rotor_speed, steps, method, max_per_rev)
     with blas_threads():
         return _modal_analysis(turbine, elements, rotor_speed, steps, method, fast, harmonics,
-                               max_per_rev, progress, cancel, wind, rho)
+                               max_per_rev, progress, cancel, wind, rho, inflow, airfoil)
 
 
 def _modal_analysis(turbine, elements, rotor_speed, steps, method, fast, harmonics,
-                    max_per_rev, progress, cancel, wind=None, rho=1.225) -> ModalResult:
+                    max_per_rev, progress, cancel, wind=None, rho=1.225, inflow="frozen",
+                    airfoil="quasi-steady") -> ModalResult:
     t0 = time.perf_counter()
     timings = {}
 
@@ -353,7 +355,7 @@ def _modal_analysis(turbine, elements, rotor_speed, steps, method, fast, harmoni
     if wind is not None:
         stage(0.0, f"building the model (blade-element momentum at {wind.speed:g} m/s)")
     model = TurbineModel(turbine, elements=elements, rotor_speed=rotor_speed, wind=wind,
-                         rho=rho)
+                         rho=rho, inflow=inflow, airfoil=airfoil)
     standstill = model.rotor_speed == 0.0
     stage(0.05, "steady state")
     if standstill:
@@ -422,7 +424,8 @@ def _modal_analysis(turbine, elements, rotor_speed, steps, method, fast, harmoni
                          "wind_direction_deg": float(np.degrees(wind.direction)),
                          "air_density": float(rho),
                          "pitch_deg": float(np.degrees(-turbine.rotor.pitch)),
-                         "aerodynamics": FROZEN_WAKE,
+                         "aerodynamics": model.aero.description,
+                         "inflow": model.aero.inflow, "airfoil": model.aero.airfoil,
                          "mean_axial_induction": float(np.mean(a))})
     total = time.perf_counter() - t0
     timings["total"] = total

@@ -24,12 +24,14 @@ DAMPING_TOL = 1e-4
 def turbine_flutter(turbine, wind, speeds, elements: Optional[int] = None,
                     method: Optional[str] = None, steps: Optional[int] = None,
                     executor=None, progress=None, rho: float = 1.225,
-                    max_hz: Optional[float] = None) -> TurbineFlutterResult:
+                    max_hz: Optional[float] = None, inflow: str = "frozen",
+                    airfoil: str = "quasi-steady") -> TurbineFlutterResult:
     """Sweep the rotor ``speeds`` [rad/s] of ``turbine`` (its pitch) in ``wind``
-    (aero.wind.Wind); returns the tracked modes and the first damping crossing."""
+    (aero.wind.Wind; ``inflow``, ``airfoil``: modal_analysis's); returns the tracked modes
+    and the first damping crossing."""
     result = campbell(turbine, speeds, elements=elements, steps=steps, method=method,
                       executor=executor, progress=progress, wind=wind, rho=rho, max_hz=max_hz,
-                      frame="rotating")
+                      frame="rotating", inflow=inflow, airfoil=airfoil)
     W = result.speeds
     best = None                           # (speed, track label, frequency [Hz], index)
     for t in result.tracks:

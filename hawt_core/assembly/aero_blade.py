@@ -31,13 +31,12 @@ from __future__ import annotations
 from typing import Optional
 
 import numpy as np
-import scipy.sparse as sp
 
-from ..aero.bem import induction_from_thrust, momentum_thrust
+from ..aero.bem import momentum_thrust, prandtl_loss, quasi_steady_inductions
 from ..aero.inflow import OYE_K, oye_time_constants
 from ..aero.strip import BladeStrips
 from ..model import Turbine
-from ..numerics.jacobian import ColouredJacobian, block_tridiagonal_pattern
+from ..numerics.jacobian import ColouredJacobian, beam_station_pattern
 from ..numerics.newton import newton
 from ..fem.beam import BLOCK_SIZE, ROOT_F, ROOT_M, U_
 from .spinning_blade import SpinningBlade
@@ -110,22 +109,10 @@ class AeroelasticBlade:
         self._jac = ColouredJacobian(self._pattern())
 
     def _pattern(self):
-        """Sparsity of dR/dy: the beam's block-tridiagonal blocks; the inductions of element
-        e reach the rows of its two nodes' blocks (e, e + 1: block 0 is the root's) and their
-        own two rows; those rows read the two nodes' blocks."""
-        N, G = self.beam.xg.shape
-        sizes = self.beam.pattern_blocks()
-        starts = np.concatenate([[0], np.cumsum(sizes)])
-        P = sp.lil_matrix((self.n, self.n), dtype=bool)
-        P[:self.n_beam, :self.n_beam] = block_tridiagonal_pattern(sizes)
-        for e in range(N):
-            nodes = np.arange(starts[e], starts[e + 2])
-            for g in range(G):
-                ind = self.n_beam + N * G * np.arange(self.n_ind) + e * G + g
-                P[np.ix_(nodes, ind)] = True
-                P[np.ix_(ind, nodes)] = True
-                P[np.ix_(ind, ind)] = True
-        return P.tocsc()
+        """Sparsity of dR/dy: the beam's blocks and the induction unknowns of each Gauss
+        point (numerics.jacobian.beam_station_pattern)."""
+        return beam_station_pattern(self.beam.pattern_blocks(), self.beam.xg.shape[1],
+                                    self.n_ind).tocsc()
 
     # ------------------------------------------------------------------ residual
     def set_inflow_time_constant(self, mean_induction: float) -> None:
@@ -170,13 +157,8 @@ class AeroelasticBlade:
             # |sin phi| (the sign from the real part: complex-step safe)
             sphi = Wa * np.sign(np.real(Wa)) / np.sqrt(Wa * Wa + Wt * Wt)
             r = self.r
-            F = np.ones_like(sphi)
-            if self.tip_loss:
-                F = F * (2 / np.pi) * np.arccos(np.exp(-0.5 * self.B * (self.tip_r - r)
-                                                       / (r * sphi)))
-            if self.hub_loss:
-                F = F * (2 / np.pi) * np.arccos(np.exp(-0.5 * self.B * (r - self.hub_r)
-                                                       / (self.hub_r * sphi)))
+            F = prandtl_loss(self.B, r, self.tip_r, self.hub_r, sphi, self.tip_loss,
+                             self.hub_loss)
             ann = 2 * np.pi * r * 0.5 * self.rho * U * U                # momentum scale
             if self.inflow == "quasi-steady":
                 rows["a"] = (self.B * thrust / self.cos_cone - momentum_thrust(a, F) * ann) / ann
@@ -185,9 +167,8 @@ class AeroelasticBlade:
                               ) / ann / r
             else:
                 # the quasi-steady inductions of the blade's loads, filtered (Oye)
-                a_qs = induction_from_thrust(self.B * thrust / self.cos_cone / ann, F)
-                ap_qs = self.B * drive / self.cos_cone / (
-                    4 * (1 - a) * F * self.rho * U * Om * np.pi * r * r)
+                a_qs, ap_qs = quasi_steady_inductions(self.B, thrust, drive, a, F, r,
+                                                      self.rho, U, Om, self.cos_cone)
                 rows["qs"] = (a_qs, ap_qs)
             if details is not None:
                 details.update(a=a, ap=ap, F=F, thrust=thrust, drive=drive, **aero)

@@ -1,5 +1,6 @@
-"""Names for the turbine state vector: the rigid unknowns, then each blade's beam block, then
-the tower's (docs/ARCHITECTURE.md, "Turbine state layout").
+"""Names for the turbine state vector: the rigid unknowns, then each blade's beam block (and
+its aerodynamic states, in wind with dynamic inflow or unsteady airfoils), then the tower's
+(docs/ARCHITECTURE.md, "Turbine state layout").
 """
 
 from __future__ import annotations
@@ -38,13 +39,20 @@ class StateLayout:
     ``layout.blade(k)`` (a BladeLayout), ``layout.names()`` (one name per unknown)."""
 
     def __init__(self, rigid: RigidSystem, n_blades: int, beam: BeamElements,
-                 tower: Optional[BeamElements] = None):
+                 tower: Optional[BeamElements] = None, aero_states: tuple = ()):
         self.rigid_names = tuple(rigid.coordinates) + tuple(rigid.speeds)
         self.n_rigid = len(self.rigid_names)
         self.n_blades = n_blades
         self.n_beam = beam.n
         self.N = beam.N
-        self.n = self.n_rigid + n_blades * beam.n
+        #: the aerodynamic unknowns per Gauss point after each blade's beam unknowns
+        #: (assembly/rotor_aero.py: state-major over (element, Gauss point))
+        self.aero_states = tuple(aero_states)
+        self.gauss = beam.xg.shape[1]
+        self.n_aero = len(self.aero_states) * beam.N * self.gauss
+        #: unknowns per blade
+        self.blade_size = beam.n + self.n_aero
+        self.n = self.n_rigid + n_blades * self.blade_size
         #: offset of the tower unknowns (after the blades), None for a rigid tower
         self.tower_offset = self.n if tower is not None else None
         self.n_tower = tower.n if tower is not None else 0
@@ -85,7 +93,17 @@ class StateLayout:
 
     def blade_offset(self, k: int) -> int:
         """Index of blade k's first unknown (its root force)."""
-        return self.n_rigid + k * self.n_beam
+        return self.n_rigid + k * self.blade_size
+
+    def aero_states_of(self, k: int, name: str) -> np.ndarray:
+        """Indices (N, G) of blade k's aerodynamic unknown ``name`` at its elements' Gauss
+        points."""
+        if name not in self.aero_states:
+            raise KeyError(f"aerodynamic state: {name!r} is not in this model; available: "
+                           f"{list(self.aero_states)}")
+        j = self.aero_states.index(name)
+        start = self.blade_offset(k) + self.n_beam + j * self.N * self.gauss
+        return start + np.arange(self.N * self.gauss).reshape(self.N, self.gauss)
 
     def blade(self, k: int) -> BladeLayout:
         """Index arrays of blade k's unknowns (u, theta in its root frame b; V, Omega, F, M
@@ -110,6 +128,8 @@ class StateLayout:
         for k in range(self.n_blades):
             out += self._beam_names(self._blades[k], self.blade_offset(k), self.n_beam,
                                     f"blade{k}")
+            out += [f"blade{k}.aero.{name}[{e + 1}].{g + 1}" for name in self.aero_states
+                    for e in range(self.N) for g in range(self.gauss)]
         if self._tower is not None:
             out += self._beam_names(self._tower, self.tower_offset, self.n_tower, "tower")
         return out

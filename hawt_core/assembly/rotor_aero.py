@@ -24,10 +24,30 @@ to the perturbations.  Perturbation loads therefore come from the sections' moti
 aerodynamic damping and stiffness of quasi-steady strip theory); no extra unknowns.
 
 The inductions stay frozen whatever the wind does (a gust changes the loads through the
-relative velocity only).  Not modelled here: skewed-wake correction of the inductions in
-yawed or tilted flow, loads on the tower and nacelle, dynamic inflow and
-unsteady-airfoil states (the blade model has Oye's inflow; the turbine's linearization is
-quasi-steady), the aerodynamic centre's offset from the reference line.
+relative velocity only).
+
+Dynamic inflow (``inflow="oye"``): the inductions become four differential unknowns per Gauss
+point of every blade, (a, a', z_a, z_t): each blade element's quasi-steady inductions from its
+own loads (the annulus momentum balance of aero/bem.py's ``quasi_steady_inductions`` with
+Prandtl's factor of the local inflow angle, Buhl's high-induction thrust; the rotor-normal
+wind U0 of the reference height as the momentum scale) filtered by Oye's two time constants
+(aero/inflow.py; tau1 from the rotor's mean induction, held constant as AeroDyn's DBEMT_Mod =
+1; tau2 per station): the induction lags the loads, as in AeroDyn's DBEMT, and in a steady
+uniform axial wind it settles on the axisymmetric BEM inductions of the frozen wake.  With
+shear, yaw or a tower shadow each element's induction follows its own loads (a per-element
+BEM, no skewed-wake correction).
+
+Unsteady airfoil (``airfoil="jones"``): the polars are read at an effective angle of attack
+that lags the quasi-steady one alpha with Wagner's indicial response in Jones's two-state
+approximation (aero/unsteady.py), written for angles: per Gauss point
+``s_i' = (b_i w / (c / 2)) (alpha - s_i)``, ``alpha_eff = (1 - A1 - A2) alpha + A1 s1 + A2
+s2`` (w the chord-plane speed, c the chord; s_i = alpha in steady flow), so that a harmonic
+alpha gives Jones's C(k) on the circulatory lift in attached flow (the attached-flow part of
+a Beddoes-Leishman model; the added-mass loads, the pitch-rate downwash and dynamic stall are
+not modelled).  Lift stays normal to the relative velocity.
+
+Not modelled here: skewed-wake correction of the inductions in yawed or tilted flow, loads on
+the tower and nacelle, the aerodynamic centre's offset from the reference line.
 """
 from __future__ import annotations
 
@@ -35,21 +55,38 @@ from typing import Optional
 
 import numpy as np
 
+from ..aero.bem import prandtl_loss, quasi_steady_inductions
+from ..aero.inflow import OYE_K, oye_time_constants
 from ..aero.strip import BladeStrips
+from ..aero.unsteady import JONES
 from ..aero.wind import Wind
 from ..model import Turbine
 from ..numerics.rotations import rot_apply
 from .aero_blade import AeroelasticBlade, distance_from_shaft
 
-__all__ = ["FrozenWakeRotor"]
+__all__ = ["RotorAerodynamics", "INFLOW_MODELS", "AIRFOIL_MODELS", "description"]
 
 
-#: What the model is, in a result's settings.
-DESCRIPTION = ("blade-element momentum (Prandtl tip/hub loss, Buhl), frozen wake, "
-               "quasi-steady airfoils")
+#: Induction models: held at the axisymmetric BEM steady state, or Oye's dynamic inflow.
+INFLOW_MODELS = ("frozen", "oye")
+#: Airfoil models: the polars at the quasi-steady angle of attack, or Jones's lag.
+AIRFOIL_MODELS = ("quasi-steady", "jones")
 
 
-class FrozenWakeRotor:
+def description(inflow: str = "frozen", airfoil: str = "quasi-steady") -> str:
+    """What the blades' aerodynamic model is, in a result's settings."""
+    wake = ("frozen wake" if inflow == "frozen"
+            else "Oye dynamic inflow per blade element")
+    foil = ("quasi-steady airfoils" if airfoil == "quasi-steady"
+            else "Jones two-state unsteady airfoils (attached flow)")
+    return f"blade-element momentum (Prandtl tip/hub loss, Buhl), {wake}, {foil}"
+
+
+#: The default model's description.
+DESCRIPTION = description()
+
+
+class RotorAerodynamics:
     """The aerodynamic loads of the blades of ``turbine`` (with ``elements`` per blade, at
     ``rotor_speed`` [rad/s]) in ``wind`` (aero.wind.Wind: the inductions from its speed and
     direction at the reference height; shear, shadow, history and gust act on the relative
@@ -57,10 +94,20 @@ class FrozenWakeRotor:
 
     ``inductions``: (a, a') (N, G) at the beam's Gauss points, default the axisymmetric BEM
     steady state; ``blade_state`` is then that solution's beam state (a starting guess for the
-    turbine's steady state)."""
+    turbine's steady state).  ``inflow`` (INFLOW_MODELS) and ``airfoil`` (AIRFOIL_MODELS):
+    the module's models; the dynamic ones add ``n`` differential unknowns per blade (after
+    its beam's), ``state_names`` per Gauss point, state-major (state j of Gauss point g of
+    element e at ``(j N + e) G + g``)."""
 
     def __init__(self, turbine: Turbine, wind: Wind, rotor_speed: float, beam,
-                 rho: float = 1.225, inductions: Optional[tuple] = None):
+                 rho: float = 1.225, inductions: Optional[tuple] = None,
+                 inflow: str = "frozen", airfoil: str = "quasi-steady"):
+        if inflow not in INFLOW_MODELS:
+            raise ValueError(f"inflow: {inflow!r} is not allowed; choose one of "
+                             f"{', '.join(INFLOW_MODELS)}")
+        if airfoil not in AIRFOIL_MODELS:
+            raise ValueError(f"airfoil: {airfoil!r} is not allowed; choose one of "
+                             f"{', '.join(AIRFOIL_MODELS)}")
         aero = turbine.aerodynamics
         if aero is None:
             raise ValueError(f"wind: turbine {turbine.name!r} has no aerodynamics section, so "
@@ -100,6 +147,41 @@ class FrozenWakeRotor:
         self._axial = (a * self.normal_speed)[:, :, None, None]
         self._swirl = (ap[:, :, None] * self.omega * self.r)[..., None]
         self.inductions = (a, ap)
+        self.inflow, self.airfoil = inflow, airfoil
+        self.description = description(inflow, airfoil)
+        self.lag = JONES if airfoil == "jones" else None
+        names = ["a", "a_tangential", "a_filter", "a_tangential_filter"] \
+            if inflow == "oye" else []
+        if self.lag is not None:
+            names += [f"alpha_lag{i + 1}" for i in range(self.lag.states)]
+        #: the aerodynamic unknowns per Gauss point, and their count per blade
+        self.state_names = tuple(names)
+        N, G = xg.shape
+        self.n = len(names) * N * G
+        self.blades = int(turbine.rotor.blades)
+        self.cos_cone = float(np.cos(turbine.rotor.precone))
+        self.hub_r = float(distance_from_shaft(turbine, 0.0))
+        self.tip_r = float(distance_from_shaft(turbine, L))
+        if inflow == "oye":
+            # tau1 from the frozen inductions' area-weighted mean (Oye; held constant)
+            w = self.r[..., 0] * beam.h[:, None] * beam.w[None, :]
+            tau1, tau2 = oye_time_constants(turbine.hub.radius + L, self.normal_speed,
+                                            float(np.sum(a * w) / np.sum(w)),
+                                            self.r / self.cos_cone)
+            self.tau1, self.tau2 = float(tau1), tau2                 # [s], (N, G, 1)
+
+    def initial_states(self, alpha=None) -> np.ndarray:
+        """The aerodynamic unknowns (n,) of one blade in steady flow: the frozen inductions
+        (and Oye's first stages at (1 - k) of them), the lag states at the quasi-steady angle
+        of attack ``alpha`` (N, G) [rad] (zero without it)."""
+        out = []
+        if self.inflow == "oye":
+            a, ap = self.inductions
+            out += [a, ap, (1 - OYE_K) * a, (1 - OYE_K) * ap]
+        if self.lag is not None:
+            al = np.zeros(self.r.shape[:2]) if alpha is None else np.real(alpha)
+            out += [al] * self.lag.states
+        return np.concatenate([np.ravel(x) for x in out]) if out else np.zeros(0)
 
     def root_data(self, B, S, P, t):
         """What the blades' loads need from the rigid system, a dict of arrays with leading
@@ -120,24 +202,74 @@ class FrozenWakeRotor:
         time = np.broadcast_to(np.asarray(t, float)[..., None], s3.shape[:-1])
         return {"vectors": np.stack([s3, tt], axis=-2), "B": B, "P": P, "time": time}
 
-    def loads(self, air):
+    def loads(self, air, x=None, xd=None, out=None):
         """The beam's ``section_loads`` callback (fem/beam.py) for blades with root data
-        ``air`` (root_data, leading dimension the beam batch): force and moment per length
-        in turned-b components from the Gauss-point velocities and the free wind."""
+        ``air`` (root_data, leading dimension the beam batch K): force and moment per length
+        in turned-b components from the Gauss-point velocities and the free wind.  ``x``,
+        ``xd`` (K, n): the blades' aerodynamic unknowns and their rates (n > 0); their rows
+        (K, n) are put in ``out["rows"]``, the quasi-steady angle of attack (N, G, K) in
+        ``out["alpha"]``."""
         st = self.strips
+        out = {} if out is None else out
+        N, G = self.r.shape[:2]
+        k = len(self.state_names)
+
+        def states(v):      # (K, n) -> (k, N, G, K)
+            return v.reshape(v.shape[0], k, N, G).transpose(1, 2, 3, 0)
+
+        X = states(x) if self.n else None
+        Xd = states(xd) if self.n else None
 
         def section_loads(sec):
             vec = sec["wind"]
             if self.field:
                 s3, t = (st.to_section(vec[..., j, :]) for j in range(2))
                 # the Gauss points in N, the wind there, in root then turned-b components
-                X = air["P"] + np.einsum("bij,ngbj->ngbi", air["B"], sec["position"])
-                U = self.wind.velocity(air["time"], X)
+                Xp = air["P"] + np.einsum("bij,ngbj->ngbi", air["B"], sec["position"])
+                U = self.wind.velocity(air["time"], Xp)
                 Ub = np.einsum("bji,ngbj->ngbi", air["B"], U)
                 wind = st.to_section(rot_apply(sec["theta"], Ub))
             else:
                 wind, s3, t = (st.to_section(vec[..., j, :]) for j in range(3))
-            W = wind - self._axial * s3 - self._swirl * t - st.to_section(sec["V"])
-            force, moment, _ = st.loads(W)
+            if self.inflow == "oye":
+                a, ap = X[0], X[1]
+                axial = (a * self.normal_speed)[..., None]
+                swirl = (ap * self.omega * self.r)[..., None]
+            else:
+                axial, swirl = self._axial, self._swirl
+            W = wind - axial * s3 - swirl * t - st.to_section(sec["V"])
+            alpha, w = st.angle_of_attack(W)
+            out["alpha"] = alpha
+            rows = []
+            alpha_eff = None
+            if self.lag is not None:
+                j0 = 4 if self.inflow == "oye" else 0
+                lag = X[j0:j0 + self.lag.states]
+                alpha_eff = (1.0 - sum(self.lag.A)) * alpha
+                lag_rows = []
+                for i, (Ai, bi) in enumerate(zip(self.lag.A, self.lag.b)):
+                    alpha_eff = alpha_eff + Ai * lag[i]
+                    lag_rows.append(Xd[j0 + i] - bi * w / (0.5 * st.chord) * (alpha - lag[i]))
+            force, moment, _ = st.loads(W, alpha_eff)
+            if self.inflow == "oye":
+                # each element's quasi-steady inductions from its own loads, filtered (Oye)
+                thrust = np.sum(force * s3, axis=-1)
+                drive = np.sum(force * t, axis=-1)
+                Wa = np.sum(W * s3, axis=-1)
+                Wt = -np.sum(W * t, axis=-1)
+                sphi = Wa * np.sign(np.real(Wa)) / np.sqrt(Wa * Wa + Wt * Wt)
+                F = prandtl_loss(self.blades, self.r, self.tip_r, self.hub_r, sphi)
+                qs = quasi_steady_inductions(self.blades, thrust, drive, a, F, self.r,
+                                             self.rho, self.normal_speed, self.omega,
+                                             self.cos_cone)
+                for j in range(2):
+                    rows.append(self.tau2 * Xd[j] + X[j] - X[2 + j] - OYE_K * qs[j])
+                for j in range(2):
+                    rows.append(self.tau1 * Xd[2 + j] + X[2 + j] - (1 - OYE_K) * qs[j])
+            if self.lag is not None:
+                rows += lag_rows
+            if rows:
+                out["rows"] = np.stack(rows).transpose(3, 0, 1, 2).reshape(
+                    rows[0].shape[-1], -1)
             return st.from_section(force), st.from_section(moment)
         return section_loads

@@ -27,15 +27,16 @@ from ..aero.wind import Wind
 from ..fem.beam import BeamElements
 from ..fem.sections import mesh_beam
 from ..model import Turbine
-from ..numerics.jacobian import STEP, ColouredJacobian, block_tridiagonal_pattern
+from ..numerics.jacobian import (STEP, ColouredJacobian, beam_station_pattern,
+                                 block_tridiagonal_pattern)
 from ..rigid import RigidSystem
 from .layout import StateLayout
-from .rotor_aero import FrozenWakeRotor
+from .rotor_aero import RotorAerodynamics
 
 __all__ = ["TurbineModel"]
 
 
-#: Trailing dimensions of each entry of the blades' root data (FrozenWakeRotor.root_data).
+#: Trailing dimensions of each entry of the blades' root data (RotorAerodynamics.root_data).
 _AIR_TAIL = {"vectors": 2, "B": 2, "P": 1, "time": 0}
 
 #: Rigid coordinates of the drivetrain (hawt_core.rigid.kane): labelled "drivetrain".
@@ -48,12 +49,16 @@ class TurbineModel:
     ``wind`` (aero.wind.Wind): blade-element loads on the blades in that wind, frozen wake
     (assembly/rotor_aero.py; the turbine needs its ``aerodynamics``), air density ``rho``
     [kg/m^3], ``inductions`` (a, a') to freeze (default: the rotor's axisymmetric BEM
-    steady state); None: in a vacuum (the paper's model).
+    steady state); None: in a vacuum (the paper's model).  ``inflow`` ("frozen" or "oye":
+    dynamic inflow) and ``airfoil`` ("quasi-steady" or "jones": unsteady airfoil) add
+    aerodynamic unknowns after each blade's beam unknowns (assembly/rotor_aero.py); a blade's
+    block is then ``blade_size`` long.
     """
 
     def __init__(self, turbine: Turbine, elements: Optional[int] = None,
                  rotor_speed: Optional[float] = None, wind: Optional[Wind] = None,
-                 rho: float = 1.225, inductions: Optional[tuple] = None):
+                 rho: float = 1.225, inductions: Optional[tuple] = None,
+                 inflow: str = "frozen", airfoil: str = "quasi-steady"):
         if rotor_speed is not None:
             turbine = turbine.with_rotor_speed(rotor_speed)
         if elements is not None:
@@ -67,14 +72,20 @@ class TurbineModel:
         self.nq, self.nu = self.rigid.n_q, self.rigid.n_u
         #: the flexible tower's beam (None: rigid tower)
         self.tower = BeamElements(mesh_beam(turbine.tower)) if turbine.tower is not None else None
-        self.layout = StateLayout(self.rigid, self.n_blades, self.beam, self.tower)
         #: the blades' aerodynamics (None: in a vacuum)
         self.wind, self.rho = wind, float(rho)
-        self.aero = (FrozenWakeRotor(turbine, wind, self.rotor_speed, self.beam, rho,
-                                     inductions) if wind is not None else None)
+        self.aero = (RotorAerodynamics(turbine, wind, self.rotor_speed, self.beam, rho,
+                                       inductions, inflow, airfoil)
+                     if wind is not None else None)
+        #: unknowns per blade: its beam's, then its aerodynamic states
+        self.n_aero = self.aero.n if self.aero is not None else 0
+        self.blade_size = self.beam.n + self.n_aero
+        self.layout = StateLayout(self.rigid, self.n_blades, self.beam, self.tower,
+                                  aero_states=self.aero.state_names if self.n_aero else ())
         self.n = self.layout.n
+        blade_diff = np.concatenate([self.beam.differential, np.ones(self.n_aero, bool)])
         self.differential = np.concatenate(
-            [np.ones(self.nq + self.nu, bool), np.tile(self.beam.differential, self.n_blades)]
+            [np.ones(self.nq + self.nu, bool), np.tile(blade_diff, self.n_blades)]
             + ([self.tower.differential] if self.tower is not None else []))
         self.gravity = bool(turbine.gravity.enabled)
         #: columns of the blades' root loads (F0, M0 of blade 0, then blade 1, ...): the only
@@ -94,19 +105,22 @@ class TurbineModel:
                 block_tridiagonal_pattern(self.tower.pattern_blocks()))
         self._reference_jac = None  # built on first use by jacobians_reference (tests only)
         self._load_scale = None     # computed on first use by load_scale
-        self._beam_jac = ColouredJacobian(block_tridiagonal_pattern(self.beam.pattern_blocks()))
+        self._beam_jac = ColouredJacobian(self._blade_pattern())
 
     def with_turbine(self, turbine: Turbine) -> "TurbineModel":
         """The model of ``turbine`` (the same mesh and rotor speed are the caller's to keep)
         in this model's wind, with this model's frozen inductions."""
+        if self.aero is None:
+            return TurbineModel(turbine)
         return TurbineModel(turbine, wind=self.wind, rho=self.rho,
-                            inductions=None if self.aero is None else self.aero.inductions)
+                            inductions=self.aero.inductions, inflow=self.aero.inflow,
+                            airfoil=self.aero.airfoil)
 
     def dynamic_dimension(self) -> int:
         """Number of dynamic states (finite eigenvalues of the linearized descriptor system):
         two per rigid coordinate and per flexible section direction of every beam element;
         equal to the exact deflation count (tests/test_assembly.py), without its O(n^3)."""
-        d = 2 * self.nq + self.n_blades * self.beam.dynamic_dimension()
+        d = 2 * self.nq + self.n_blades * (self.beam.dynamic_dimension() + self.n_aero)
         return d + (self.tower.dynamic_dimension() if self.tower is not None else 0)
 
     def tower_top(self, ydot, y) -> Optional[np.ndarray]:
@@ -148,13 +162,24 @@ class TurbineModel:
             return None
         return {k: np.concatenate([a[k] for a in airs]) for k in airs[0]}
 
-    def _blade_residual(self, ydb, yb, v, w, g, air):
-        """Beam rows (K, nbl) of K blades at root motions v, w (K, 3), gravity g (K, 3) or
-        None and root data ``air`` (leading dimension K) or None (in a vacuum)."""
+    def _blade_pattern(self):
+        """Sparsity of one blade block's rows w.r.t. its unknowns: the beam's blocks and the
+        aerodynamic states of each Gauss point."""
+        k = len(self.aero.state_names) if self.n_aero else 0
+        return beam_station_pattern(self.beam.pattern_blocks(), self.beam.xg.shape[1], k)
+
+    def _blade_residual(self, ydb, yb, v, w, g, air, out=None):
+        """Blade rows (K, blade_size) of K blades at root motions v, w (K, 3), gravity g
+        (K, 3) or None and root data ``air`` (leading dimension K) or None (in a vacuum);
+        ``out``: a dict the aerodynamics fill (RotorAerodynamics.loads)."""
         if air is None:
             return self.beam.residual(ydb, yb, v, w, g)
-        return self.beam.residual(ydb, yb, v, w, g, wind=air["vectors"],
-                                  section_loads=self.aero.loads(air))
+        nb = self.beam.n
+        out = {} if out is None else out
+        rb = self.beam.residual(ydb[:, :nb], yb[:, :nb], v, w, g, wind=air["vectors"],
+                                section_loads=self.aero.loads(air, yb[:, nb:], ydb[:, nb:],
+                                                              out))
+        return np.concatenate([rb, out["rows"]], axis=1) if self.n_aero else rb
 
     def _tower_residual(self, ydt, yt, tip_loads, batch=1):
         """Tower beam rows (batch, n_t): clamped at the ground (root frame inertial, at rest),
@@ -183,7 +208,7 @@ class TurbineModel:
         """(K, n) residual rows at K instants t (K,)."""
         if self.tower is not None:      # the flexible-tower rigid system is not batched
             return np.stack([self._residual_tower(a, b, c) for a, b, c in zip(ydot, y, t)])
-        K, nb, nbl = y.shape[0], self.n_blades, self.beam.n
+        K, nb, nbl = y.shape[0], self.n_blades, self.blade_size
         nq, nu, nr = self.nq, self.nu, self.nq + self.nu
         q, u = y[:, :nq], y[:, nq:nr]
         qd, ud = ydot[:, :nq], ydot[:, nq:nr]
@@ -202,7 +227,7 @@ class TurbineModel:
 
     def _residual_tower(self, ydot, y, t):
         nq, nu, nr = self.nq, self.nu, self.nq + self.nu
-        nb, nbl, to = self.n_blades, self.beam.n, self.layout.tower_offset
+        nb, nbl, to = self.n_blades, self.blade_size, self.layout.tower_offset
         q, u = y[:nq], y[nq:nr]
         qd, ud = ydot[:nq], ydot[nq:nr]
         yb = y[nr:to].reshape(nb, nbl)
@@ -220,7 +245,7 @@ class TurbineModel:
     def sparsity(self) -> sp.csr_matrix:
         """Structural pattern of dR/dy and dR/dydot (an over-estimate at block level)."""
         nr = self.nq + self.nu
-        blade = block_tridiagonal_pattern(self.beam.pattern_blocks())
+        blade = self._blade_pattern()
         P = sp.lil_matrix((self.n, self.n), dtype=bool)
         P[:, :nr] = True                    # rigid unknowns enter every row (root motion)
         P[:nr, :nr] = True
@@ -249,7 +274,7 @@ class TurbineModel:
         ydot = np.asarray(ydot, float)
         if self.tower is not None:
             return self._jacobians_tower(ydot, y, t)
-        nq, nu, nr, nb, nbl = self.nq, self.nu, self.nq + self.nu, self.n_blades, self.beam.n
+        nq, nu, nr, nb, nbl = self.nq, self.nu, self.nq + self.nu, self.n_blades, self.blade_size
         q, u, qd, ud = y[:nq], y[nq:nr], ydot[:nq], ydot[nq:nr]
         yb = y[nr:].reshape(nb, nbl)
         ydb = ydot[nr:].reshape(nb, nbl)
@@ -310,7 +335,7 @@ class TurbineModel:
         loads (which enter the tower's tip equilibrium rows additively) w.r.t. the rigid
         unknowns and rates, the blade root loads and the tower-top state and rates."""
         h = STEP
-        nq, nu, nr, nb, nbl = self.nq, self.nu, self.nq + self.nu, self.n_blades, self.beam.n
+        nq, nu, nr, nb, nbl = self.nq, self.nu, self.nq + self.nu, self.n_blades, self.blade_size
         to = self.layout.tower_offset
         q, u, ud = y[:nq], y[nq:nr], ydot[nq:nr]
         yb = y[nr:to].reshape(nb, nbl)
@@ -399,7 +424,7 @@ class TurbineModel:
         ts = np.atleast_1d(np.asarray(t, float))
         M = len(ts)
         h = STEP
-        nq, nu, nr, nb, nbl = self.nq, self.nu, self.nq + self.nu, self.n_blades, self.beam.n
+        nq, nu, nr, nb, nbl = self.nq, self.nu, self.nq + self.nu, self.n_blades, self.blade_size
         rc = np.arange(nr)
         kc = self._root_cols
         yb, ydb = y[nr:].reshape(nb, nbl), ydot[nr:].reshape(nb, nbl)
@@ -457,22 +482,51 @@ class TurbineModel:
     # ------------------------------------------------------------------ steady state
     def _rigid_rotation_state(self) -> np.ndarray:
         """Rigid coordinates and speeds zero; blades undeformed in rigid rotation with the
-        hub; a flexible tower at rest, undeformed (zeros)."""
+        hub (their aerodynamic states settled: _settle_aero_states); a flexible tower at
+        rest, undeformed (zeros)."""
         y = np.zeros(self.n)
         v, w = self.rigid.root_motion(np.zeros(self.nq), np.zeros(self.nu), 0.0)
         for k in range(self.n_blades):
             off = self.layout.blade_offset(k)
             y[off:off + self.beam.n] = self.beam.rigid_body_state(np.real(v[k]), np.real(w[k]))
+        return self._settle_aero_states(y)
+
+    def _settle_aero_states(self, y) -> np.ndarray:
+        """``y`` with every blade's aerodynamic states at their steady values for its beam
+        state at t = 0 (RotorAerodynamics.initial_states: the frozen inductions, the lag
+        states at the angle of attack of the blades' own motion)."""
+        if not self.n_aero:
+            return y
+        y = y.copy()
+        offs = [self.layout.blade_offset(k) for k in range(self.n_blades)]
+        alpha = None
+        if self.aero.lag is not None:       # the angles of attack, with the lag states zero
+            for off in offs:
+                y[off + self.beam.n:off + self.blade_size] = self.aero.initial_states()
+            nq, nr = self.nq, self.nq + self.nu
+            q, u = y[:nq], y[nq:nr]
+            tw = self.tower_top(np.zeros(self.n), y)
+            v, w = self.rigid.root_motion(q, u, 0.0, tw)
+            g = self.rigid.gravity_in_root(q, 0.0, tw) if self.gravity else None
+            yb = np.stack([y[off:off + self.blade_size] for off in offs])
+            out = {}
+            self._blade_residual(np.zeros_like(yb), yb, v, w, g,
+                                 self._air_flat(self._air(q, 0.0, tw), self.n_blades), out)
+            alpha = out["alpha"]                                        # (N, G, Nb)
+        for k, off in enumerate(offs):
+            y[off + self.beam.n:off + self.blade_size] = self.aero.initial_states(
+                None if alpha is None else alpha[..., k])
         return y
 
     def initial_guess(self) -> np.ndarray:
         """The rigid rotation (_rigid_rotation_state); in wind every blade in the blade's
-        own aeroelastic steady state on the spinning hub."""
+        own aeroelastic steady state on the spinning hub (aerodynamic states settled)."""
         y = self._rigid_rotation_state()
         if self.aero is not None and self.aero.blade_state is not None:
             for k in range(self.n_blades):
                 off = self.layout.blade_offset(k)
                 y[off:off + self.beam.n] = self.aero.blade_state
+            y = self._settle_aero_states(y)
         return y
 
     def load_scale(self) -> float:
@@ -531,7 +585,7 @@ class TurbineModel:
             rows += tw.tolist()
             cols += tw.tolist()
             vals += [1.0] * self.tower.n
-        nb = self.beam.n
+        nb = self.blade_size
         for k in range(self.n_blades):
             src = self.layout.blade_offset((k + 1) % self.n_blades) + np.arange(nb)
             dst = self.layout.blade_offset(k) + np.arange(nb)

@@ -137,7 +137,8 @@ def load_wing_case(spec: str):
                      "the flow speed: the lowest speed at which a mode's damping crosses "
                      "zero, with its frequency, and the static divergence speed. CASE: a wing "
                      "file or a shipped case (goland); or a turbine with --wind U --rpm "
-                     "A:B:N: its aeroelastic Floquet modes (frozen-wake BEM) over rotor speeds, "
+                     "A:B:N: its aeroelastic Floquet modes (BEM; --inflow, --airfoil) over rotor "
+                     "speeds, "
                      "and the lowest speed where a mode's damping crosses zero.")
 def cmd_flutter(args) -> int:
     from ..analyses.flutter import flutter
@@ -146,6 +147,7 @@ def cmd_flutter(args) -> int:
         return _turbine_flutter(args)
     if args.wind is not None or args.rpm is not None:
         raise ValueError("--wind, --rpm: only for a turbine CASE (a wing sweeps --speeds)")
+    check_aero_model_args(args)         # a wing's lag is --quasi-steady's
     return report(args, lambda status: flutter(
         wing, args.speeds, elements=args.elements, modes=args.modes,
         unsteady=not args.quasi_steady, progress=status))
@@ -171,7 +173,8 @@ def _turbine_flutter(args) -> int:
     with sweep_executor(args.scheduler, None) as (pool, where):
         def run(status):
             r = turbine_flutter(turbine, wind, speeds, elements=args.elements,
-                                executor=pool, progress=status)
+                                executor=pool, progress=status, inflow=args.inflow,
+                                airfoil=args.airfoil)
             r.campbell.settings.update(executor=where, operating_point=point)
             return r
         return report(args, run)
@@ -194,6 +197,7 @@ def _flutter_args(p):
                    help="turbine: controller file whose schedule gives the pitch at --wind")
     p.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
                    help="turbine: run the speeds on this Dask scheduler's workers")
+    aero_model_args(p)
     p.set_defaults(wind_direction=0.0, rotor_speed=None)
     p.add_argument("--speeds", type=grid_type("--speeds", 1e-3, 1e4, "m/s"),
                    default="20:200:19", metavar="START:STOP:COUNT",
@@ -274,6 +278,29 @@ def turbine_in_wind(args, turbine):
                            "pitch_deg": math.degrees(pitch), "source": source}
 
 
+def aero_model_args(p):
+    """``--inflow`` and ``--airfoil``: the blades' aerodynamic model in wind
+    (assembly/rotor_aero.py)."""
+    from ..assembly.rotor_aero import AIRFOIL_MODELS, INFLOW_MODELS
+    p.add_argument("--inflow", choices=INFLOW_MODELS, default="frozen",
+                   help="with --wind: the inductions frozen at the operating point's BEM "
+                        "state (default), or Oye's dynamic inflow (four states per blade "
+                        "element: the induction lags the loads)")
+    p.add_argument("--airfoil", choices=AIRFOIL_MODELS, default="quasi-steady",
+                   help="with --wind: polars at the quasi-steady angle of attack (default), "
+                        "or Jones's two-state lag of the circulatory lift (attached flow)")
+
+
+def check_aero_model_args(args):
+    """--inflow/--airfoil other than the defaults need --wind."""
+    if args.wind is None:
+        for flag, v in (("--inflow", getattr(args, "inflow", "frozen") != "frozen"),
+                        ("--airfoil", getattr(args, "airfoil", "quasi-steady")
+                         != "quasi-steady")):
+            if v:
+                raise ValueError(f"{flag}: only used with --wind")
+
+
 def wind_args(p):
     """``--wind U`` and what goes with it (modes, campbell at one wind speed)."""
     p.add_argument("--wind", type=finite_float("--wind", unit="m/s"), default=None,
@@ -293,10 +320,12 @@ def wind_args(p):
     p.add_argument("--controller", default=None, metavar="DISCON.IN",
                    help="ROSCO controller file whose schedule sets the rotor speed and pitch "
                         "at --wind (default for nrel5mw and iea15mw: the rosco wheel's)")
+    aero_model_args(p)
 
 
 def check_wind_args(args):
     """The --wind options' ranges (ValueError naming the flag)."""
+    check_aero_model_args(args)
     if args.wind is None:
         for flag, v in (("--wind-direction", args.wind_direction != 0.0),
                         ("--shear", getattr(args, "shear", 0.0) != 0.0),

@@ -62,7 +62,8 @@ def cmd_modes(args) -> int:
         result = with_accuracy(args, turbine, lambda t, n: modal_analysis(
             t, elements=n, rotor_speed=None if wind is not None else args.rotor_speed,
             steps=args.steps, method=args.method, max_per_rev=args.max_per_rev,
-            progress=status, wind=wind), progress=lambda msg: status(0.0, msg))
+            progress=status, wind=wind, inflow=args.inflow, airfoil=args.airfoil),
+            progress=lambda msg: status(0.0, msg))
     finally:
         status.close()
     result.settings["turbine_file"] = args.turbine
@@ -115,6 +116,8 @@ def cmd_campbell(args) -> int:
                          "points)")
     if args.wind is None and (args.controller is not None or args.wind_direction):
         raise ValueError("--controller, --wind-direction: only used with --wind")
+    from .aero import check_aero_model_args
+    check_aero_model_args(args)
     if not abs(args.wind_direction) < 90.0:
         raise ValueError(f"--wind-direction: {args.wind_direction!r} is not allowed; need "
                          "-90 < DEG < 90 (the rotor faces the wind)")
@@ -134,6 +137,7 @@ def cmd_campbell(args) -> int:
             if schedule is not None:
                 result = campbell_in_wind(turbine, args.wind, schedule, executor=pool,
                                           direction=math.radians(args.wind_direction),
+                                          inflow=args.inflow, airfoil=args.airfoil,
                                           **common)
             else:
                 result = campbell(turbine, args.speeds, executor=pool, **common)
@@ -163,7 +167,7 @@ def _campbell_args(p):
                         "STOP (in a vacuum)")
     p.add_argument("--wind", type=grid_type("--wind", 0.1, 100.0, "m/s"), default=None,
                    metavar="START:STOP:COUNT",
-                   help="wind speeds [m/s] instead: the aeroelastic diagram (frozen-wake BEM) "
+                   help="wind speeds [m/s] instead: the aeroelastic diagram (BEM) "
                         "at the operating points of the controller's schedule, frequency and "
                         "damping against wind speed")
     p.add_argument("--controller", default=None, metavar="DISCON.IN",
@@ -171,6 +175,8 @@ def _campbell_args(p):
                         "nrel5mw and iea15mw: the rosco wheel's)")
     p.add_argument("--wind-direction", type=finite_float("--wind-direction", unit="deg"),
                    default=0.0, metavar="DEG", help="with --wind: yaw misalignment [deg]")
+    from .aero import aero_model_args
+    aero_model_args(p)
     elements_arg(p)
     marching_args(p)
     p.add_argument("--workers", type=positive_int, default=None, metavar="W",

@@ -33,7 +33,8 @@ def cmd_simulate(args) -> int:
     if args.wind is not None:
         turbine, wind, _ = turbine_in_wind(args, turbine)
     model = TurbineModel(turbine, elements=args.elements, wind=wind,
-                         rotor_speed=None if wind is not None else args.rotor_speed)
+                         rotor_speed=None if wind is not None else args.rotor_speed,
+                         inflow=args.inflow, airfoil=args.airfoil)
     sim = Simulator(model, step_deg=step_deg, perturb=perturb, record=bool(args.output),
                     method=args.method)
     status = ProgressLine(not args.quiet or args.progress, force=args.progress)

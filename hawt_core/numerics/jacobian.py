@@ -33,6 +33,35 @@ def block_tridiagonal_pattern(sizes) -> sp.csr_matrix:
     return sp.csr_matrix((data, (np.concatenate(rows), np.concatenate(cols))), shape=(n, n))
 
 
+def beam_station_pattern(sizes, gauss_points: int, states: int) -> sp.csr_matrix:
+    """Pattern of a beam (block sizes ``sizes``: the root block, then one per element; see
+    block_tridiagonal_pattern) followed by ``states`` unknowns at each of its elements'
+    ``gauss_points`` Gauss points, laid out state-major (state j of Gauss point g of element
+    e at ``n_beam + (j N + e) G + g``): the states of element e reach the rows of its two
+    nodes' blocks (e, e + 1) and their own rows (all the states of that Gauss point), which
+    read the two nodes' blocks."""
+    sizes = list(sizes)
+    beam = block_tridiagonal_pattern(sizes)
+    N, G, k = len(sizes) - 1, int(gauss_points), int(states)
+    if k == 0:
+        return beam
+    starts = np.concatenate([[0], np.cumsum(sizes)])
+    n_beam = int(starts[-1])
+    rows, cols = [], []
+    for e in range(N):
+        nodes = np.arange(starts[e], starts[e + 2])
+        for g in range(G):
+            own = n_beam + N * G * np.arange(k) + e * G + g
+            for r, c in ((nodes, own), (own, nodes), (own, own)):
+                rr, cc = np.meshgrid(r, c, indexing="ij")
+                rows.append(rr.ravel()), cols.append(cc.ravel())
+    n = n_beam + N * G * k
+    extra = sp.csr_matrix((np.ones(sum(len(r) for r in rows), bool),
+                           (np.concatenate(rows), np.concatenate(cols))), shape=(n, n))
+    return (sp.block_diag([beam, sp.csr_matrix((N * G * k, N * G * k), dtype=bool)],
+                          format="csr") + extra).astype(bool)
+
+
 def greedy_colouring(pattern: sp.spmatrix) -> np.ndarray:
     """Colour the columns so that no two columns of one colour share a row."""
     pat = sp.csc_matrix(pattern, dtype=bool)

@@ -143,9 +143,17 @@ class ModalResult:
             footer.append(error_note(s["error_estimate"], "elements per blade"))
         if s.get("in_vacuum"):
             footer.append(VACUUM_NOTE)
+        # the blades' inflow and lag states' own (non-oscillatory) modes: counted, not listed
+        aero = [m for m in self.modes if m.family == "aerodynamic"]
+        if aero:
+            w0 = s["rotor_speed"]
+            decay = [-m.real_per_rev * w0 for m in aero]
+            footer.append(f"({len(aero)} non-oscillatory modes of the blades' aerodynamic "
+                          f"states (inflow, airfoil lag), decay rates {min(decay):.3g} to "
+                          f"{max(decay):.3g} 1/s, not listed: --json has them)")
         footer.append(f"computed in {self.compute_time:.2f} s")
-        return format_table(header, self.modes, footer,
-                            unit="Hz" if self.standstill else "per-rev")
+        return format_table(header, [m for m in self.modes if m.family != "aerodynamic"],
+                            footer, unit="Hz" if self.standstill else "per-rev")
 
     def shape_samples(self, mode: Mode):
         """Periodic eigenvector of ``mode`` over one revolution: (times (M,), states (M, n)).

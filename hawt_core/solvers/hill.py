@@ -177,30 +177,45 @@ class _ShiftInvert:
         return self.sigma + 1.0 / mu[ok], X[:, ok]
 
 
-def _window_eigs(Ah, Eh, lo: float, hi: float, stats: dict, depth: int = 0):
-    """Eigenpairs of the pencil (Ah, Eh) in the box lo <= Im <= hi, |Re| <= (hi - lo) / 2:
-    ARPACK's k eigenvalues nearest the box centre, k doubled until the farthest of them lies
-    outside the box's circumscribed circle; a window that needs more than MAX_PER_WINDOW is
-    halved (both halves searched)."""
+def _window_eigs(Ah, Eh, lo: float, hi: float, stats: dict, depth: int = 0,
+                 re_lo: Optional[float] = None, re_hi: Optional[float] = None):
+    """Eigenpairs of the pencil (Ah, Eh) in the box lo <= Im <= hi, re_lo <= Re <= re_hi
+    (default |Re| <= (hi - lo) / 2): ARPACK's k eigenvalues nearest the box centre, k doubled
+    until the farthest of them lies outside the box's circumscribed circle; a window that
+    needs more than MAX_PER_WINDOW is halved across its longer side (both halves searched;
+    in Re the left half open at its right edge): many non-oscillatory exponents on the real
+    axis (the blades' inflow and lag states and their Hill copies at Im = k w) fill a window
+    that only a split in Re thins."""
     N = Ah.shape[0]
     c = 0.5 * (lo + hi)
     r = 0.5 * (hi - lo)
-    radius = math.sqrt(2.0) * r
+    if re_lo is None:
+        re_lo, re_hi = -r, r
+    cr = 0.5 * (re_lo + re_hi)
+    radius = 0.5 * math.hypot(hi - lo, re_hi - re_lo)
     # a shift just off the imaginary axis: undamped modes (and a free angle's zero) are
     # never exactly at it
-    si = _ShiftInvert(Ah, Eh, complex(-1e-3 * r, c), stats,
+    si = _ShiftInvert(Ah, Eh, complex(cr - 1e-3 * r, c), stats,
                       f"Hill's method in the band [{lo:.4g}, {hi:.4g}] rad/s")
     k = min(32, N - 2)
     while True:
         lam, X = si.nearest(k)
         if (lam.size and np.abs(lam - si.sigma).max() > radius) or k >= N - 2:
             eps = 1e-9 * max(abs(lo), abs(hi), r)     # real exponents sit on Im = 0
-            sel = (lam.imag >= lo - eps) & (lam.imag <= hi) & (np.abs(lam.real) <= r)
+            sel = ((lam.imag >= lo - eps) & (lam.imag <= hi) & (lam.real >= re_lo)
+                   & (lam.real <= re_hi))
             return lam[sel], X[:, sel]
-        if 2 * k > MAX_PER_WINDOW and depth < 8:
+        if 2 * k > MAX_PER_WINDOW and depth < 12:
             del si
-            a = _window_eigs(Ah, Eh, lo, c, stats, depth + 1)
-            b = _window_eigs(Ah, Eh, c, hi, stats, depth + 1)
+            if re_hi - re_lo > hi - lo:      # split in Re, the left half open on the right
+                m = 0.5 * (re_lo + re_hi)
+                a = _window_eigs(Ah, Eh, lo, hi, stats, depth + 1, re_lo, m)
+                keep = a[0].real < m
+                a = (a[0][keep], a[1][:, keep])
+                b = _window_eigs(Ah, Eh, lo, hi, stats, depth + 1, m, re_hi)
+            else:
+                a = _window_eigs(Ah, Eh, lo, c, stats, depth + 1, re_lo, re_hi)
+                b = _window_eigs(Ah, Eh, c, hi, stats, depth + 1, re_lo, re_hi)
             return np.concatenate([a[0], b[0]]), np.concatenate([a[1], b[1]], axis=1)
         k = min(2 * k, N - 2)
 

@@ -83,7 +83,7 @@ class MultiBladeTransform:
         self.n = model.n
         self.names = coordinate_names(nb)
         self.orders = _orders(nb)
-        self.n_beam = model.beam.n
+        self.n_beam = model.blade_size
         self.offset = model.layout.blade_offset(0)
         self.rotor_period = 2.0 * math.pi / self.omega
         self.period = self.rotor_period / nb * (2 if nb % 2 == 0 else 1)

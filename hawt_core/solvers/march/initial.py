@@ -212,13 +212,13 @@ def mode_delta(model, mode, amplitude, blade_signs=None):
         x = np.asarray(mode)
         if x.shape == (n,):
             delta[:] = x
-        elif x.shape == (model.beam.n,):
+        elif x.shape == (model.blade_size,):
             for k in range(nb):
                 off = model.layout.blade_offset(k)
-                delta[off:off + model.beam.n] = signs[k] * x
+                delta[off:off + model.blade_size] = signs[k] * x
         else:
             raise ValueError(f"mode: a vector of length {x.shape} is not allowed; need "
-                             f"{n} (turbine state) or {model.beam.n} (one blade)")
+                             f"{n} (turbine state) or {model.blade_size} (one blade)")
     if not np.all(np.isfinite(delta)):
         raise ValueError("mode: the vector has non-finite entries")
     z = np.concatenate([np.concatenate([delta[model.layout.blade(k).u[1:].ravel()],

@@ -1,0 +1,279 @@
+"""Dynamic inflow and unsteady-airfoil states on the whole turbine (assembly/rotor_aero.py,
+TurbineModel(inflow="oye", airfoil="jones")): unknowns after each blade's beam unknowns in the
+one residual.
+
+References, each test stating its tolerance:
+* the aeroelastic blade on the spinning hub (assembly/aero_blade.py, a separate assembly with
+  its own induction rows): with no rigid freedom the turbine's three blades are three copies
+  of it, so its eigenvalues (Oye inflow; and the algebraic momentum balance for Oye's time
+  constants going to zero) are the turbine's;
+* the frozen wake (tests/test_turbine_aero.py's references): Oye's time constants going to
+  infinity freeze the inductions;
+* Lock's flap damping with Theodorsen's lag in Jones's approximation: the teeter exponent of
+  a rigid flat-plate rotor solves ``I lam^2 + D(lam) lam + K = 0`` with ``D(lam)`` the
+  integral over the blades of the circulatory lift's transfer function at the local reduced
+  Laplace variable ``lam b / (Omega r)`` (written in the test);
+* complex steps on the whole residual and central differences (Jacobians);
+* the axisymmetric BEM steady state (the frozen wake's inductions), which the dynamic states
+  must settle on.
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+import scipy.linalg as sl
+
+from hawt_core.aero.inflow import OYE_K
+from hawt_core.aero.unsteady import JONES, IndicialLag
+from hawt_core.aero.wind import Wind
+from hawt_core.assembly import TurbineModel
+from hawt_core.assembly.aero_blade import AeroelasticBlade
+from hawt_core.solvers.steady import constant_steady_state
+from test_turbine_aero import (CHORD, LIFT_SLOPE, RHO, axisymmetric, check_structured_jacobians,
+                               nrel5mw, teetering_rotor)
+
+
+def finite_eigenvalues(E, A, limit=1e5):
+    lam = sl.eigvals(A, E)
+    return lam[np.isfinite(lam) & (np.abs(lam) < limit)]
+
+
+def turbine_eigenvalues(model):
+    y = constant_steady_state(model)
+    E, A = (M.toarray() for M in model.linearize(y))
+    return finite_eigenvalues(E, A), y
+
+
+def blade_eigenvalues(blade):
+    """The aeroelastic blade's finite eigenvalues by complex steps of its residual."""
+    y = blade.steady_state()
+    n, h = blade.n, 1e-30
+    Jy = blade.residual(np.zeros((n, n)), y + 1j * h * np.eye(n)).imag.T / h
+    Jd = blade.residual(1j * h * np.eye(n), np.broadcast_to(y, (n, n))).imag.T / h
+    return finite_eigenvalues(Jd, -Jy)
+
+
+def mismatch(a, b):
+    """Largest distance from an eigenvalue of ``a`` to the nearest of ``b``, relative to
+    max(1, |lam|) [-]."""
+    return max(np.min(np.abs(x - b)) / max(1.0, abs(x)) for x in a)
+
+
+def clamped_nrel(elements=4):
+    """The NREL 5-MW, axisymmetric (rigid tower, no tilt or gravity, yaw locked) with a rigid
+    shaft: no rigid freedom at all, the blades clamped to a hub spinning at 9.16 rpm."""
+    t = axisymmetric(nrel5mw())
+    return replace(t, drivetrain=replace(t.drivetrain, stiffness=None))
+
+
+def test_dynamic_states_settle_on_the_bem_steady_state():
+    """Reference: the axisymmetric BEM steady state of the frozen-wake model.  NREL 5-MW at
+    8 m/s, 8 elements, flexible drivetrain: with Oye's inflow and Jones's lag the steady
+    state has the frozen inductions (1e-8), Oye's first stages at (1 - k) of them (1e-12),
+    every lag state at its station's angle of attack (1e-12 rad), and the same shaft twist
+    (the rotor torque) within 1e-9; the aerodynamic unknowns are named per blade."""
+    t = axisymmetric(nrel5mw())
+    frozen = TurbineModel(t, elements=8, wind=Wind(8.0))
+    model = TurbineModel(t, elements=8, wind=Wind(8.0), inflow="oye", airfoil="jones")
+    assert model.aero.state_names == ("a", "a_tangential", "a_filter", "a_tangential_filter",
+                                      "alpha_lag1", "alpha_lag2")
+    assert model.blade_size == model.beam.n + 6 * 8 * 3
+    assert model.n == frozen.n + 3 * 6 * 8 * 3
+    assert model.dynamic_dimension() == frozen.dynamic_dimension() + 3 * 6 * 8 * 3
+    y0, y = constant_steady_state(frozen), constant_steady_state(model)
+    lay = model.layout
+    assert lay.names()[lay.aero_states_of(2, "alpha_lag2")[7, 2]] == \
+        "blade2.aero.alpha_lag2[8].3"
+    a, ap = frozen.aero.inductions
+    out = {}
+    nb = model.beam.n
+    for k in range(3):
+        assert np.abs(y[lay.aero_states_of(k, "a")] - a).max() < 1e-8
+        assert np.abs(y[lay.aero_states_of(k, "a_tangential")] - ap).max() < 1e-8
+        assert np.abs(y[lay.aero_states_of(k, "a_filter")]
+                      - (1 - OYE_K) * y[lay.aero_states_of(k, "a")]).max() < 1e-12
+    twist = lay["shaft_twist"]
+    assert y[twist] == pytest.approx(y0[twist], rel=1e-9)
+    # the lag states equal the quasi-steady angle of attack of the blades' own motion
+    q = y[:model.nq]
+    v, w = model.rigid.root_motion(q, y[model.nq:model.nq + model.nu], 0.0)
+    yb = np.stack([y[lay.blade_offset(k):lay.blade_offset(k) + model.blade_size]
+                   for k in range(3)])
+    model._blade_residual(np.zeros_like(yb), yb, v, w, None,
+                          model._air_flat(model._air(q, 0.0), 3), out)
+    for k in range(3):
+        for s in ("alpha_lag1", "alpha_lag2"):
+            assert np.abs(y[lay.aero_states_of(k, s)] - out["alpha"][..., k]).max() < 1e-12
+    assert yb[0, nb:].size == model.n_aero
+
+
+def test_oye_inflow_on_the_turbine_is_the_aeroelastic_blades():
+    """Reference: the aeroelastic blade on the spinning hub (its own momentum rows and Oye
+    filters).  NREL 5-MW, 8 m/s, 4 elements, no rigid freedom: every finite eigenvalue of
+    the turbine with Oye's inflow is one of the blade's with Oye's inflow, and back, within
+    1e-7 (found 3e-9); with Oye's time constants 1e-6 of theirs the turbine's eigenvalues of
+    the structure (|lam| < 200 1/s; the inflow's own are at -1e6 / tau) approach the blade's
+    with the algebraic momentum balance (quasi-steady inflow) within 1e-4, and with time
+    constants 1e6 of theirs they approach the frozen wake's within 1e-4 (the inflow's own
+    eigenvalues then near zero); frozen and quasi-steady differ by more than 1e-2."""
+    t = clamped_nrel()
+    n = 4
+    model = TurbineModel(t, elements=n, wind=Wind(8.0), inflow="oye")
+    assert model.nq == model.nu == 0
+    lam, _ = turbine_eigenvalues(model)
+    blade = AeroelasticBlade(t, 8.0, elements=n, inflow="oye")
+    lam_b = blade_eigenvalues(blade)
+    assert model.aero.tau1 == pytest.approx(blade.tau1, rel=1e-8)
+    assert len(lam) == 3 * len(lam_b) == model.dynamic_dimension()
+    assert mismatch(lam, lam_b) < 1e-7 and mismatch(lam_b, lam) < 1e-7
+
+    def structural(x):
+        return x[(np.abs(x) < 200) & (np.abs(x) > 0.1)]
+
+    quasi = structural(blade_eigenvalues(AeroelasticBlade(t, 8.0, elements=n)))
+    frozen = structural(turbine_eigenvalues(TurbineModel(t, elements=n, wind=Wind(8.0)))[0])
+    for factor, reference in ((1e-6, quasi), (1e6, frozen)):
+        m = TurbineModel(t, elements=n, wind=Wind(8.0), inflow="oye")
+        m.aero.tau1 *= factor
+        m.aero.tau2 = m.aero.tau2 * factor
+        found = structural(turbine_eigenvalues(m)[0])
+        assert mismatch(reference, found) < 1e-4
+    assert mismatch(quasi, frozen) > 1e-2
+
+
+def test_jones_lag_gives_locks_teeter_damping_with_theodorsens_lag():
+    """Reference: the teeter exponent of a rigid flat-plate rotor whose circulatory lift lags
+    as Jones's approximation of Theodorsen's C(k) says, the root of ``I lam^2 + D(lam) lam +
+    I w_n^2 = 0`` with ``D(lam) = 2 int_e^R (rho/2) 2 pi c Omega r^3 T(lam b / (Omega r))
+    dr`` (T(s) = 1 - sum A_i s / (s + b_i); Gauss-Legendre, 400 points; Newton on the scalar
+    equation) for the paper's teetering rotor with blades 1e3 times stiffer (module
+    docstring of tests/test_turbine_aero.py): real part within 1e-5 (found 4e-7),
+    frequency within 1e-6; the quasi-steady airfoil misses the real part by 4 %."""
+    t = teetering_rotor()
+    n = 4
+    omega = t.rotor.speed
+    e, L = t.hub.radius, t.blade.length
+    R = e + L
+    m = float(np.mean(t.blade.sections.mass))
+    inertia = 2 * m * (R ** 3 - e ** 3) / 3 + t.hub.inertia_lateral
+    blades = inertia - t.hub.inertia_lateral
+    wn2 = omega ** 2 * (blades + t.hub.inertia_longitudinal - t.hub.inertia_lateral) / inertia
+    x, wq = np.polynomial.legendre.leggauss(400)
+    r, wq = e + (x + 1) / 2 * L, wq * L / 2
+    semichord = CHORD / 2
+
+    def damping(lam):
+        s = lam * semichord / (omega * r)
+        T = 1 - sum(Ai * s / (s + bi) for Ai, bi in zip(JONES.A, JONES.b))
+        return 2 * 0.5 * RHO * LIFT_SLOPE * CHORD * omega * np.sum(wq * r ** 3 * T)
+
+    def f(lam):
+        return inertia * lam ** 2 + damping(lam) * lam + inertia * wn2
+
+    lam = 1j * np.sqrt(wn2)
+    for _ in range(20):
+        h = 1e-7
+        lam = lam - f(lam) / ((f(lam + h) - f(lam - h)) / (2 * h))
+    assert abs(f(lam)) < 1e-9 * inertia * wn2
+    found = {}
+    for airfoil in ("quasi-steady", "jones"):
+        model = TurbineModel(t, elements=n, wind=Wind(1e-3), airfoil=airfoil,
+                             inductions=(np.zeros((n, 3)), np.zeros((n, 3))))
+        y = constant_steady_state(model)
+        E, A = (M.toarray() for M in model.linearize(y))
+        lv, X = sl.eig(A, E)
+        ok = np.isfinite(lv) & (np.abs(lv) < 1e6)
+        lv, X = lv[ok], X[:, ok]
+        rows, wts = model.display_rows()
+        share = (np.abs(X[model.layout["teeter"]]) * wts[0]
+                 / np.abs(X[rows] * wts[:, None]).max(0))
+        found[airfoil] = lv[int(np.argmax(share * (lv.imag > 0)))]
+    assert found["jones"].real == pytest.approx(lam.real, rel=1e-5)
+    assert found["jones"].imag == pytest.approx(lam.imag, rel=1e-6)
+    assert abs(found["quasi-steady"].real / lam.real - 1) > 0.03
+
+
+def test_structured_jacobians_with_aerodynamic_states():
+    """Reference: plain coloured complex steps on the whole residual and central differences
+    (step 1e-6), within 1e-9 and 1e-5 of the largest entry: the teetering rotor with free
+    yaw, gravity, tilt and a 15 deg yaw misalignment, and the NREL 5-MW with its flexible
+    tower in a sheared wind, both with Oye's inflow and Jones's lag, at a perturbed state
+    and rates (every aerodynamic row reached)."""
+    cases = [
+        (teetering_rotor(stiffness=1.0, gravity=True, tilt=0.1, yaw_free=True), 2,
+         Wind(7.0, direction=np.radians(15.0))),
+        (replace(nrel5mw(), rotor=replace(nrel5mw().rotor, speed=1.0)), 2,
+         Wind(9.0, shear_exponent=0.2))]
+    rng = np.random.default_rng(5)
+    for t, n, wind in cases:
+        model = TurbineModel(t, elements=n, wind=wind, inflow="oye", airfoil="jones")
+        aero_cols = [model.layout.aero_states_of(k, s)[0, 1] for k in range(model.n_blades)
+                     for s in model.aero.state_names]
+        check_structured_jacobians(model, rng, aero_cols, random_columns=4)
+
+
+def test_aerodynamic_model_names_are_checked_and_a_vacuum_has_no_states():
+    """Bad model names fail naming the field and the choices; in a vacuum (and with the
+    default frozen, quasi-steady model) a blade's block is its beam's."""
+    t = axisymmetric(nrel5mw())
+    with pytest.raises(ValueError, match="inflow: 'pitt' is not allowed; choose one of "
+                                         "frozen, oye"):
+        TurbineModel(t, elements=2, wind=Wind(8.0), inflow="pitt")
+    with pytest.raises(ValueError, match="airfoil: 'bl' is not allowed"):
+        TurbineModel(t, elements=2, wind=Wind(8.0), airfoil="bl")
+    for kw in ({}, {"wind": Wind(8.0)}):
+        m = TurbineModel(t, elements=2, **kw)
+        assert m.blade_size == m.beam.n and m.n_aero == 0
+    assert IndicialLag().states == JONES.states == 2
+
+
+def test_modes_with_inflow_states_name_the_inflow_modes():
+    """The NREL 5-MW, axisymmetric (rigid tower, no tilt or gravity, yaw locked) at 8 m/s,
+    2 elements, Oye's inflow (multi-blade coordinates, time-invariant): the non-oscillatory
+    modes led by the induction states (most of the modes below 3 per-rev: 48) are labelled
+    ``aerodynamic`` (symmetry ``inflow``), hidden from the table with their count, and every
+    other mode is structural; the settings name the model."""
+    from hawt_core.analyses.modal import modal_analysis
+    t = axisymmetric(nrel5mw())
+    res = modal_analysis(t, elements=2, wind=Wind(8.0), inflow="oye", max_per_rev=3.0,
+                         method="hill")
+    aero = [m for m in res.modes if m.family == "aerodynamic"]
+    assert len(aero) > len(res.modes) / 2
+    assert all(m.symmetry == "inflow" and abs(m.frequency_per_rev) < 1e-3 for m in aero)
+    table = res.table()
+    assert f"({len(aero)} non-oscillatory modes of the blades' aerodynamic states" in table
+    listed = table.split("\n")[2:-3]
+    assert len(listed) == len(res.modes) - len(aero)
+    assert {m.family for m in res.modes} - {"aerodynamic"} <= {
+        "flap", "lag", "torsion", "drivetrain", "axial", "shear"}
+    assert res.settings["inflow"] == "oye" and "Oye dynamic inflow" in \
+        res.settings["aerodynamics"]
+
+
+def test_commands_take_the_aerodynamic_model_and_refuse_it_without_wind(tmp_path, capsys):
+    """``hawt simulate FILE --wind U --inflow oye --airfoil jones``: a short simulation with
+    the states runs and reports finite values; ``--inflow`` and ``--airfoil`` without
+    ``--wind`` (modes, campbell, simulate, a wing's flutter) fail naming the flag, and a
+    model name outside the choices is refused by the parser."""
+    import json
+    from hawt_core import cli
+    from hawt_core.io import dump_turbine
+    f = tmp_path / "rotor.yaml"
+    f.write_text(dump_turbine(teetering_rotor(stiffness=1.0)))
+    assert cli.main(["simulate", str(f), "--wind", "6", "--rotor-speed", "5", "-n", "2",
+                     "--duration", "0.05", "--step-deg", "5", "--inflow", "oye",
+                     "--airfoil", "jones", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["steps"] > 0 and all(np.isfinite(v) for v in out["final"].values())
+    for argv in (["modes", str(f), "-n", "2", "--inflow", "oye"],
+                 ["campbell", str(f), "--speeds", "1:2:2", "--airfoil", "jones"],
+                 ["simulate", str(f), "--duration", "1", "--inflow", "oye"],
+                 ["flutter", "goland", "--airfoil", "jones"]):
+        assert cli.main(argv) != 0
+        err = capsys.readouterr().err
+        assert ("--inflow: only used with --wind" in err
+                or "--airfoil: only used with --wind" in err), err
+    assert cli.main(["modes", str(f), "--wind", "6", "--inflow", "pitt-peters"]) != 0
+    assert "--inflow: invalid choice: 'pitt-peters'" in capsys.readouterr().err
