@@ -23,7 +23,17 @@ import numpy as np
 from ..numerics.rotations import atan2
 from .polars import StationPolars
 
-__all__ = ["BladeStrips"]
+__all__ = ["BladeStrips", "inflow_sine"]
+
+
+def inflow_sine(W, axis, motion):
+    """|sin phi| of the inflow angle in the rotor frame, from the relative air velocity ``W``
+    and the shaft axis ``axis`` and direction of the blade's motion ``motion`` (..., 3), the
+    same components: phi = atan2(W . axis, -W . motion) (complex-step safe: the sign from the
+    real part), for Prandtl's factors."""
+    Wa = np.sum(W * axis, axis=-1)
+    Wt = -np.sum(W * motion, axis=-1)
+    return Wa * np.sign(np.real(Wa)) / np.sqrt(Wa * Wa + Wt * Wt)
 
 
 class BladeStrips:

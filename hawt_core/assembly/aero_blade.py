@@ -34,7 +34,7 @@ import numpy as np
 
 from ..aero.bem import momentum_thrust, prandtl_loss, quasi_steady_inductions
 from ..aero.inflow import OYE_K, oye_time_constants
-from ..aero.strip import BladeStrips
+from ..aero.strip import BladeStrips, inflow_sine
 from ..model import Turbine
 from ..numerics.jacobian import ColouredJacobian, beam_station_pattern
 from ..numerics.newton import newton
@@ -152,10 +152,7 @@ class AeroelasticBlade:
             thrust = np.sum(force * s3, axis=-1)
             drive = np.sum(force * tt, axis=-1)
             # the inflow angle in the rotor frame for Prandtl's factors
-            Wa = np.sum(W * s3, axis=-1)
-            Wt = -np.sum(W * tt, axis=-1)
-            # |sin phi| (the sign from the real part: complex-step safe)
-            sphi = Wa * np.sign(np.real(Wa)) / np.sqrt(Wa * Wa + Wt * Wt)
+            sphi = inflow_sine(W, s3, tt)
             r = self.r
             F = prandtl_loss(self.B, r, self.tip_r, self.hub_r, sphi, self.tip_loss,
                              self.hub_loss)

@@ -29,13 +29,14 @@ relative velocity only).
 Dynamic inflow (``inflow="oye"``): the inductions become four differential unknowns per Gauss
 point of every blade, (a, a', z_a, z_t): each blade element's quasi-steady inductions from its
 own loads (the annulus momentum balance of aero/bem.py's ``quasi_steady_inductions`` with
-Prandtl's factor of the local inflow angle, Buhl's high-induction thrust; the rotor-normal
-wind U0 of the reference height as the momentum scale) filtered by Oye's two time constants
+Prandtl's factor of the local inflow angle, Buhl's high-induction thrust; the free wind's
+component along the shaft at the element, U_n, as the momentum balance's speed, and the axial
+induced velocity a U_n along the shaft) filtered by Oye's two time constants
 (aero/inflow.py; tau1 from the rotor's mean induction, held constant as AeroDyn's DBEMT_Mod =
 1; tau2 per station): the induction lags the loads, as in AeroDyn's DBEMT, and in a steady
 uniform axial wind it settles on the axisymmetric BEM inductions of the frozen wake.  With
-shear, yaw or a tower shadow each element's induction follows its own loads (a per-element
-BEM, no skewed-wake correction).
+shear, yaw, a tower shadow or a wind history each element's induction follows its own loads
+and its own wind (a per-element BEM; no skewed-wake correction).
 
 Unsteady airfoil (``airfoil="jones"``): the polars are read at an effective angle of attack
 that lags the quasi-steady one alpha with Wagner's indicial response in Jones's two-state
@@ -57,7 +58,7 @@ import numpy as np
 
 from ..aero.bem import prandtl_loss, quasi_steady_inductions
 from ..aero.inflow import OYE_K, oye_time_constants
-from ..aero.strip import BladeStrips
+from ..aero.strip import BladeStrips, inflow_sine
 from ..aero.unsteady import JONES
 from ..aero.wind import Wind
 from ..model import Turbine
@@ -233,7 +234,10 @@ class RotorAerodynamics:
                 wind, s3, t = (st.to_section(vec[..., j, :]) for j in range(3))
             if self.inflow == "oye":
                 a, ap = X[0], X[1]
-                axial = (a * self.normal_speed)[..., None]
+                # the free wind along the shaft at the element (AeroDyn's disk-normal speed):
+                # the axial induced velocity's and the momentum balance's speed
+                normal = np.sum(wind * s3, axis=-1)
+                axial = (a * normal)[..., None]
                 swirl = (ap * self.omega * self.r)[..., None]
             else:
                 axial, swirl = self._axial, self._swirl
@@ -255,13 +259,10 @@ class RotorAerodynamics:
                 # each element's quasi-steady inductions from its own loads, filtered (Oye)
                 thrust = np.sum(force * s3, axis=-1)
                 drive = np.sum(force * t, axis=-1)
-                Wa = np.sum(W * s3, axis=-1)
-                Wt = -np.sum(W * t, axis=-1)
-                sphi = Wa * np.sign(np.real(Wa)) / np.sqrt(Wa * Wa + Wt * Wt)
+                sphi = inflow_sine(W, s3, t)
                 F = prandtl_loss(self.blades, self.r, self.tip_r, self.hub_r, sphi)
                 qs = quasi_steady_inductions(self.blades, thrust, drive, a, F, self.r,
-                                             self.rho, self.normal_speed, self.omega,
-                                             self.cos_cone)
+                                             self.rho, normal, self.omega, self.cos_cone)
                 for j in range(2):
                     rows.append(self.tau2 * Xd[j] + X[j] - X[2 + j] - OYE_K * qs[j])
                 for j in range(2):

@@ -39,6 +39,14 @@ __all__ = ["TurbineModel"]
 #: Trailing dimensions of each entry of the blades' root data (RotorAerodynamics.root_data).
 _AIR_TAIL = {"vectors": 2, "B": 2, "P": 1, "time": 0}
 
+#: Residual between the collocation times of a periodic steady state, relative to the load
+#: scale, that its harmonics must reach (solvers/periodic.py): in a vacuum, and in wind (the
+#: airfoil tables are C1 in the angle of attack, so the orbit's Fourier series decays
+#: algebraically: NREL 5-MW at 8 m/s, 16 elements: 4e-7, 2e-6, 2e-8 with 4, 8, 16 harmonics,
+#: 1e-8 still at 32).
+INTERPOLATION_TOL = 1e-8
+AERO_INTERPOLATION_TOL = 1e-6
+
 #: Rigid coordinates of the drivetrain (hawt_core.rigid.kane): labelled "drivetrain".
 DRIVETRAIN_COORDINATES = ("shaft_twist", "generator_azimuth")
 
@@ -77,6 +85,9 @@ class TurbineModel:
         self.aero = (RotorAerodynamics(turbine, wind, self.rotor_speed, self.beam, rho,
                                        inductions, inflow, airfoil)
                      if wind is not None else None)
+        #: what a periodic steady state's harmonics must reach (solvers/periodic.py)
+        self.interpolation_tol = AERO_INTERPOLATION_TOL if wind is not None \
+            else INTERPOLATION_TOL
         #: unknowns per blade: its beam's, then its aerodynamic states
         self.n_aero = self.aero.n if self.aero is not None else 0
         self.blade_size = self.beam.n + self.n_aero

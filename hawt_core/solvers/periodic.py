@@ -80,11 +80,9 @@ class PeriodicSteadyState:
 
 
 #: Residual between the collocation times, relative to the load scale, that ends the doubling
-#: of harmonics: in a vacuum, and in wind (the airfoil tables are C1 in the angle of attack, so
-#: the orbit's Fourier series decays algebraically: NREL 5-MW at 8 m/s, 16 elements: 4e-7,
-#: 2e-6, 2e-8 with 4, 8, 16 harmonics, 1e-8 still at 32).
+#: of harmonics, unless the model declares its own ``interpolation_tol`` (TurbineModel does in
+#: wind: assembly/turbine.py AERO_INTERPOLATION_TOL).
 INTERPOLATION_TOL = 1e-8
-AERO_INTERPOLATION_TOL = 1e-6
 
 
 def periodic_steady_state(model, harmonics: int = 8, tol: float = 1e-9, max_iter: int = 25,
@@ -94,11 +92,10 @@ def periodic_steady_state(model, harmonics: int = 8, tol: float = 1e-9, max_iter
     gravity, tilt or asymmetry), otherwise the periodic one by harmonic balance, starting with
     ``harmonics`` harmonics and doubling them (up to ``max_harmonics``) until the residual
     between the collocation times is below ``interpolation_tol`` relative to the load scale
-    (default INTERPOLATION_TOL, in wind AERO_INTERPOLATION_TOL).
+    (default the model's ``interpolation_tol``, else INTERPOLATION_TOL).
     Raises ConvergenceError when Newton does not converge."""
     if interpolation_tol is None:
-        interpolation_tol = (AERO_INTERPOLATION_TOL if getattr(model, "aero", None) is not None
-                             else INTERPOLATION_TOL)
+        interpolation_tol = getattr(model, "interpolation_tol", INTERPOLATION_TOL)
     if model.rotor_speed <= 0:
         raise ValueError(f"rotor_speed: {model.rotor_speed} is not allowed for a periodic "
                          "steady state; need > 0 [rad/s]")
