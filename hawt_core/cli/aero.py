@@ -305,7 +305,8 @@ def wind_args(p):
     """``--wind U`` and what goes with it (modes, campbell at one wind speed)."""
     p.add_argument("--wind", type=finite_float("--wind", unit="m/s"), default=None,
                    metavar="U", help="analyse in a steady wind of U m/s (at hub height): "
-                   "blade-element momentum loads with the wake frozen at the operating point "
+                   "blade-element momentum loads (wake frozen at the operating point unless "
+                   "--inflow oye) "
                    "(rotor speed and pitch from --rotor-speed/--pitch, else the controller's "
                    "schedule, else the turbine file)")
     p.add_argument("--wind-direction", type=finite_float("--wind-direction", unit="deg"),
