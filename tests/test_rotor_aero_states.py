@@ -32,7 +32,7 @@ from hawt_core.assembly import TurbineModel
 from hawt_core.assembly.aero_blade import AeroelasticBlade
 from hawt_core.solvers.steady import constant_steady_state
 from test_turbine_aero import (CHORD, LIFT_SLOPE, RHO, axisymmetric, check_structured_jacobians,
-                               nrel5mw, teetering_rotor)
+                               nrel5mw, rigid_teeter, teeter_exponent, teetering_rotor)
 
 
 def finite_eigenvalues(E, A, limit=1e5):
@@ -191,11 +191,7 @@ def test_jones_lag_gives_locks_teeter_damping_with_theodorsens_lag():
     n = 4
     omega = t.rotor.speed
     e, L = t.hub.radius, t.blade.length
-    R = e + L
-    m = float(np.mean(t.blade.sections.mass))
-    inertia = 2 * m * (R ** 3 - e ** 3) / 3 + t.hub.inertia_lateral
-    blades = inertia - t.hub.inertia_lateral
-    wn2 = omega ** 2 * (blades + t.hub.inertia_longitudinal - t.hub.inertia_lateral) / inertia
+    inertia, wn2 = rigid_teeter(t)
     x, wq = np.polynomial.legendre.leggauss(400)
     r, wq = e + (x + 1) / 2 * L, wq * L / 2
     semichord = CHORD / 2
@@ -215,17 +211,9 @@ def test_jones_lag_gives_locks_teeter_damping_with_theodorsens_lag():
     assert abs(f(lam)) < 1e-9 * inertia * wn2
     found = {}
     for airfoil in ("quasi-steady", "jones"):
-        model = TurbineModel(t, elements=n, wind=Wind(1e-3), airfoil=airfoil,
-                             inductions=(np.zeros((n, 3)), np.zeros((n, 3))))
-        y = constant_steady_state(model)
-        E, A = (M.toarray() for M in model.linearize(y))
-        lv, X = sl.eig(A, E)
-        ok = np.isfinite(lv) & (np.abs(lv) < 1e6)
-        lv, X = lv[ok], X[:, ok]
-        rows, wts = model.display_rows()
-        share = (np.abs(X[model.layout["teeter"]]) * wts[0]
-                 / np.abs(X[rows] * wts[:, None]).max(0))
-        found[airfoil] = lv[int(np.argmax(share * (lv.imag > 0)))]
+        found[airfoil] = teeter_exponent(TurbineModel(
+            t, elements=n, wind=Wind(1e-3), airfoil=airfoil,
+            inductions=(np.zeros((n, 3)), np.zeros((n, 3)))))
     assert found["jones"].real == pytest.approx(lam.real, rel=1e-5)
     assert found["jones"].imag == pytest.approx(lam.imag, rel=1e-6)
     assert abs(found["quasi-steady"].real / lam.real - 1) > 0.03

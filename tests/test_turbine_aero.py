@@ -82,33 +82,49 @@ def test_teeter_damping_is_locks_closed_form():
     omega = t.rotor.speed
     e, L = t.hub.radius, t.blade.length
     R = e + L
-    m = float(np.mean(t.blade.sections.mass))
-    inertia = 2 * m * (R ** 3 - e ** 3) / 3 + t.hub.inertia_lateral
+    inertia, wn2 = rigid_teeter(t)
     C = 2 * 0.5 * RHO * LIFT_SLOPE * CHORD * omega * (R ** 4 - e ** 4) / 4
     expected = -C / (2 * inertia)
     found = {}
     for wind in (None, Wind(1e-3)):
         kw = {} if wind is None else {
             "wind": wind, "inductions": (np.zeros((n, 3)), np.zeros((n, 3)))}
-        model = TurbineModel(t, elements=n, **kw)
-        y = constant_steady_state(model)
-        E, A = (M.toarray() for M in model.linearize(y))
-        import scipy.linalg as sl
-        lam, X = sl.eig(A, E)
-        ok = np.isfinite(lam) & (np.abs(lam) < 1e6)
-        lam, X = lam[ok], X[:, ok]
-        rows, wts = model.display_rows()
-        share = np.abs(X[model.layout["teeter"]]) * wts[0] / np.abs(X[rows] * wts[:, None]).max(0)
-        k = int(np.argmax(share * (lam.imag > 0)))
-        found[wind is None] = lam[k]
+        found[wind is None] = teeter_exponent(TurbineModel(t, elements=n, **kw))
     assert abs(found[True].real) <= 1e-9 * omega
     assert found[False].real == pytest.approx(expected, rel=1e-5)
-    # and the frequency: the centrifugal teeter stiffness Omega^2 (I_33 - I_11) of the
-    # spinning rotor (Euler's equations: blades, a line along h1, give I_b; the hub Ihlong -
-    # Ihlat) over the teeter inertia, damped: sqrt(w_n^2 - (C / 2 I)^2)
-    blades = inertia - t.hub.inertia_lateral
-    wn2 = omega ** 2 * (blades + t.hub.inertia_longitudinal - t.hub.inertia_lateral) / inertia
+    # and the frequency: the centrifugal teeter stiffness over the teeter inertia, damped:
+    # sqrt(w_n^2 - (C / 2 I)^2)
     assert found[False].imag == pytest.approx(np.sqrt(wn2 - expected ** 2), rel=1e-5)
+
+
+def rigid_teeter(t):
+    """(I [kg m^2], w_n^2 [1/s^2]) of the rigid teetering rotor ``t`` (uniform blades): the
+    teeter inertia, blades as lines along h1 plus the hub's lateral inertia, and the
+    centrifugal teeter stiffness Omega^2 (I_33 - I_11) of the spinning rotor (Euler's
+    equations: the blades give I_b, the hub Ihlong - Ihlat) over it."""
+    e, L = t.hub.radius, t.blade.length
+    R = e + L
+    m = float(np.mean(t.blade.sections.mass))
+    inertia = 2 * m * (R ** 3 - e ** 3) / 3 + t.hub.inertia_lateral
+    blades = inertia - t.hub.inertia_lateral
+    wn2 = t.rotor.speed ** 2 * (blades + t.hub.inertia_longitudinal
+                                - t.hub.inertia_lateral) / inertia
+    return inertia, wn2
+
+
+def teeter_exponent(model):
+    """The exponent (Im > 0) of the mode with the largest teeter share (teeter angle times
+    the rotor radius against the largest displayed motion) about the model's constant steady
+    state, dense QZ of its linearization."""
+    import scipy.linalg as sl
+    y = constant_steady_state(model)
+    E, A = (M.toarray() for M in model.linearize(y))
+    lam, X = sl.eig(A, E)
+    ok = np.isfinite(lam) & (np.abs(lam) < 1e6)
+    lam, X = lam[ok], X[:, ok]
+    rows, wts = model.display_rows()
+    share = np.abs(X[model.layout["teeter"]]) * wts[0] / np.abs(X[rows] * wts[:, None]).max(0)
+    return lam[int(np.argmax(share * (lam.imag > 0)))]
 
 
 def test_each_blade_carries_the_aeroelastic_blade_loads_and_the_shaft_their_torque():
