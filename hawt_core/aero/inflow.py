@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["OYE_K", "oye_time_constants", "oye_rates", "oye_steady"]
+__all__ = ["OYE_K", "oye_time_constants", "oye_rates", "oye_residuals", "oye_steady"]
 
 #: Oye's weight of the fast part of the response.
 OYE_K = 0.6
@@ -41,6 +41,14 @@ def oye_rates(z, W, W_qs, tau1, tau2, k: float = OYE_K):
     dz = ((1.0 - k) * W_qs - z) / tau1
     dW = (z + k * W_qs - W) / tau2
     return dz, dW
+
+
+def oye_residuals(z, W, z_rate, W_rate, W_qs, tau1, tau2, k: float = OYE_K):
+    """(row_z, row_W): the two filters as residual rows of a DAE (no division by the time
+    constants), tau1 z' + z - (1 - k) W_qs and tau2 W' + W - z - k W_qs; zero when the rates
+    are oye_rates'."""
+    return (tau1 * z_rate + z - (1.0 - k) * W_qs,
+            tau2 * W_rate + W - z - k * W_qs)
 
 
 def oye_steady(W_qs, k: float = OYE_K):

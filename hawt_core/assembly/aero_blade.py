@@ -33,7 +33,7 @@ from typing import Optional
 import numpy as np
 
 from ..aero.bem import momentum_thrust, prandtl_loss, quasi_steady_inductions
-from ..aero.inflow import OYE_K, oye_time_constants
+from ..aero.inflow import oye_residuals, oye_steady, oye_time_constants
 from ..aero.strip import BladeStrips, inflow_sine
 from ..model import Turbine
 from ..numerics.jacobian import ColouredJacobian, beam_station_pattern
@@ -41,7 +41,15 @@ from ..numerics.newton import newton
 from ..fem.beam import BLOCK_SIZE, ROOT_F, ROOT_M, U_
 from .spinning_blade import SpinningBlade
 
-__all__ = ["AeroelasticBlade", "distance_from_shaft"]
+__all__ = ["AeroelasticBlade", "annulus_mean", "distance_from_shaft"]
+
+
+def annulus_mean(beam, r, a) -> float:
+    """The mean of ``a`` (N, G) over the rotor disk swept by ``beam``'s Gauss points at radii
+    ``r`` (N, G, ...) [m]: weights r h w (annulus area per Gauss point), e.g. the rotor's mean
+    axial induction for Oye's tau1."""
+    w = r[..., 0] * beam.h[:, None] * beam.w[None, :]
+    return float(np.sum(np.real(a) * w) / np.sum(w))
 
 
 def distance_from_shaft(turbine: Turbine, x) -> np.ndarray:
@@ -181,13 +189,11 @@ class AeroelasticBlade:
             extra = np.concatenate([flat(rows["a"]), flat(rows["ap"])], axis=1)
         else:
             rates = self._split(yd)
-            k, t1, t2 = OYE_K, self.tau1, self.tau2
-            out_rows = []
-            for j, q in enumerate(rows["qs"]):        # the filters of a and of a'
-                out_rows.append((j, t2 * rates[j] + ind[j] - ind[2 + j] - k * q))
-                out_rows.append((2 + j, t1 * rates[2 + j] + ind[2 + j] - (1 - k) * q))
-            extra = np.concatenate([flat(r) for _, r in sorted(out_rows, key=lambda x: x[0])],
-                                   axis=1)
+            # the filters of a and of a': rows of (a, a', z_a, z_t), the unknowns' order
+            (za, Wa), (zt, Wt) = (oye_residuals(ind[2 + j], ind[j], rates[2 + j], rates[j], q,
+                                                self.tau1, self.tau2)
+                                  for j, q in enumerate(rows["qs"]))
+            extra = np.concatenate([flat(r) for r in (Wa, Wt, za, zt)], axis=1)
         out = np.concatenate([r_beam, extra], axis=1)
         return out[0] if one else out
 
@@ -233,7 +239,7 @@ class AeroelasticBlade:
         z = np.zeros(self.n)
         inductions = [np.full(self.n_stations, a0), np.full(self.n_stations, ap0)]
         if self.inflow == "oye":
-            inductions += [(1 - OYE_K) * inductions[0], (1 - OYE_K) * inductions[1]]
+            inductions += [oye_steady(inductions[0])[0], oye_steady(inductions[1])[0]]
         # the tolerance's scale: the residual of the rigid, unloaded blade (a warm start's
         # small first residual would ask for less than the round-off of the root rows)
         cold = np.concatenate([self.beam.rigid_body_state(self.blade.v, self.blade.w),
@@ -249,7 +255,6 @@ class AeroelasticBlade:
                       what="aeroelastic blade steady state", reuse_jacobian=True)
         if self.inflow == "oye":        # tau1 from this state's mean induction (area-weighted)
             a = y[self.n_beam:self.n_beam + self.n_stations].reshape(self.beam.xg.shape)
-            w = self.r[..., 0] * self.beam.h[:, None] * self.beam.w[None, :]
-            self.set_inflow_time_constant(float(np.sum(a * w) / np.sum(w)))
+            self.set_inflow_time_constant(annulus_mean(self.beam, self.r, a))
         return y
 

@@ -57,13 +57,13 @@ from typing import Optional
 import numpy as np
 
 from ..aero.bem import prandtl_loss, quasi_steady_inductions
-from ..aero.inflow import OYE_K, oye_time_constants
+from ..aero.inflow import oye_residuals, oye_steady, oye_time_constants
 from ..aero.strip import BladeStrips, inflow_sine
 from ..aero.unsteady import JONES
 from ..aero.wind import Wind
 from ..model import Turbine
 from ..numerics.rotations import rot_apply
-from .aero_blade import AeroelasticBlade, distance_from_shaft
+from .aero_blade import AeroelasticBlade, annulus_mean, distance_from_shaft
 
 __all__ = ["RotorAerodynamics", "INFLOW_MODELS", "AIRFOIL_MODELS", "description"]
 
@@ -82,9 +82,6 @@ def description(inflow: str = "frozen", airfoil: str = "quasi-steady") -> str:
             else "Jones two-state unsteady airfoils (attached flow)")
     return f"blade-element momentum (Prandtl tip/hub loss, Buhl), {wake}, {foil}"
 
-
-#: The default model's description.
-DESCRIPTION = description()
 
 
 class RotorAerodynamics:
@@ -165,9 +162,8 @@ class RotorAerodynamics:
         self.tip_r = float(distance_from_shaft(turbine, L))
         if inflow == "oye":
             # tau1 from the frozen inductions' area-weighted mean (Oye; held constant)
-            w = self.r[..., 0] * beam.h[:, None] * beam.w[None, :]
             tau1, tau2 = oye_time_constants(turbine.hub.radius + L, self.normal_speed,
-                                            float(np.sum(a * w) / np.sum(w)),
+                                            annulus_mean(beam, self.r, a),
                                             self.r / self.cos_cone)
             self.tau1, self.tau2 = float(tau1), tau2                 # [s], (N, G, 1)
 
@@ -177,8 +173,8 @@ class RotorAerodynamics:
         of attack ``alpha`` (N, G) [rad] (zero without it)."""
         out = []
         if self.inflow == "oye":
-            a, ap = self.inductions
-            out += [a, ap, (1 - OYE_K) * a, (1 - OYE_K) * ap]
+            (za, a), (zt, ap) = (oye_steady(x) for x in self.inductions)
+            out += [a, ap, za, zt]
         if self.lag is not None:
             al = np.zeros(self.r.shape[:2]) if alpha is None else np.real(alpha)
             out += [al] * self.lag.states
@@ -263,10 +259,9 @@ class RotorAerodynamics:
                 F = prandtl_loss(self.blades, self.r, self.tip_r, self.hub_r, sphi)
                 qs = quasi_steady_inductions(self.blades, thrust, drive, a, F, self.r,
                                              self.rho, normal, self.omega, self.cos_cone)
-                for j in range(2):
-                    rows.append(self.tau2 * Xd[j] + X[j] - X[2 + j] - OYE_K * qs[j])
-                for j in range(2):
-                    rows.append(self.tau1 * Xd[2 + j] + X[2 + j] - (1 - OYE_K) * qs[j])
+                (za, Wa), (zt, Wt) = (oye_residuals(X[2 + j], X[j], Xd[2 + j], Xd[j], qs[j],
+                                                    self.tau1, self.tau2) for j in range(2))
+                rows += [Wa, Wt, za, zt]            # the unknowns' order: a, a', z_a, z_t
             if self.lag is not None:
                 rows += lag_rows
             if rows:

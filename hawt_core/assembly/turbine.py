@@ -491,16 +491,16 @@ class TurbineModel:
         return Jd, -Jy
 
     # ------------------------------------------------------------------ steady state
-    def _rigid_rotation_state(self) -> np.ndarray:
+    def _rigid_rotation_state(self, settle: bool = True) -> np.ndarray:
         """Rigid coordinates and speeds zero; blades undeformed in rigid rotation with the
-        hub (their aerodynamic states settled: _settle_aero_states); a flexible tower at
-        rest, undeformed (zeros)."""
+        hub (their aerodynamic states settled, _settle_aero_states, unless ``settle`` is
+        False: zero); a flexible tower at rest, undeformed (zeros)."""
         y = np.zeros(self.n)
         v, w = self.rigid.root_motion(np.zeros(self.nq), np.zeros(self.nu), 0.0)
         for k in range(self.n_blades):
             off = self.layout.blade_offset(k)
             y[off:off + self.beam.n] = self.beam.rigid_body_state(np.real(v[k]), np.real(w[k]))
-        return self._settle_aero_states(y)
+        return self._settle_aero_states(y) if settle else y
 
     def _settle_aero_states(self, y) -> np.ndarray:
         """``y`` with every blade's aerodynamic states at their steady values for its beam
@@ -532,13 +532,12 @@ class TurbineModel:
     def initial_guess(self) -> np.ndarray:
         """The rigid rotation (_rigid_rotation_state); in wind every blade in the blade's
         own aeroelastic steady state on the spinning hub (aerodynamic states settled)."""
-        y = self._rigid_rotation_state()
+        y = self._rigid_rotation_state(settle=False)
         if self.aero is not None and self.aero.blade_state is not None:
             for k in range(self.n_blades):
                 off = self.layout.blade_offset(k)
                 y[off:off + self.beam.n] = self.aero.blade_state
-            y = self._settle_aero_states(y)
-        return y
+        return self._settle_aero_states(y)       # once, at the blades' final beam state
 
     def load_scale(self) -> float:
         """The scale [N] of the loads a steady state balances: the largest residual (at
