@@ -127,6 +127,17 @@ class TurbineModel:
                             inductions=self.aero.inductions, inflow=self.aero.inflow,
                             airfoil=self.aero.airfoil)
 
+    def set_controls(self, controls) -> None:
+        """Drive the pitch bearings and the generator torque by ``controls``
+        (hawt_core.rigid.ControlInputs; None: the blades at the mesh's pitch, no generator
+        torque); see RigidSystem.set_controls for the frames and signs."""
+        self.rigid.set_controls(controls)
+
+    @property
+    def controls(self):
+        """The ControlInputs driving the actuators, or None."""
+        return self.rigid.controls
+
     def dynamic_dimension(self) -> int:
         """Number of dynamic states (finite eigenvalues of the linearized descriptor system):
         two per rigid coordinate and per flexible section direction of every beam element;

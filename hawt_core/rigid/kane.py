@@ -80,6 +80,7 @@ import numpy as np
 
 from ..numerics.rotations import cross as _cross, dot as _dot, matvec as _mv, rot1, rot2, rot3
 from ..numerics.rotations import tip_basis
+from .actuators import ControlInputs
 
 __all__ = ["RigidSystem"]
 
@@ -175,6 +176,47 @@ class RigidSystem:
         #: (Nb, 3): root point relative to the teeter-axis point SH, hub basis h
         self.root_offset_hub = np.array([[self.e * np.cos(p), self.e * np.sin(p), -self.lhd1]
                                          for p in self.blade_azimuth])
+        #: the blades' pitch already built into their meshes (structural sign, model.Rotor)
+        self.mesh_pitch = float(rotor.pitch)
+        #: pitch bearings and generator torque as functions of time (set_controls), or None:
+        #: the blades held at the mesh's pitch, no generator torque
+        self.controls = None
+
+    def set_controls(self, controls) -> None:
+        """Drive the pitch bearings and the generator by ``controls`` (rigid.actuators.
+        ControlInputs, or None to remove them).  Blade k's root frame turns about its root
+        axis b1 by ``-beta_k(t) - Rotor.pitch`` (beta towards feather; the mesh already holds
+        Rotor.pitch), at the rate ``-beta_k'`` (the bearing's motion is prescribed: its torque is
+        a constraint torque, reacted by the hub).  The generator torque ``T(t)`` [N m] acts
+        on the generator rotor against its spin, reacted by the nacelle: ``-N T`` on the
+        generator-speed row (N the gearbox ratio); it needs the free generator."""
+        if controls is None:
+            self.controls = None
+            return
+        if not isinstance(controls, ControlInputs):
+            raise ValueError(f"controls: {type(controls).__name__} is not allowed; need a "
+                             "hawt_core.rigid.actuators.ControlInputs")
+        if controls.n_blades != self.n_blades:
+            raise ValueError(f"controls: {controls.n_blades} blades is not allowed; this "
+                             f"turbine has {self.n_blades}")
+        if not self.generator_free and np.any(controls.generator_torque(0.0) != 0):
+            raise ValueError("controls: a generator torque needs drivetrain.generator: free "
+                             "(this turbine's generator turns at the prescribed speed)")
+        self.controls = controls
+
+    def pitch_turn(self, t):
+        """(delta, delta_dot) (t.shape + (Nb,)): the turn of each root frame about b1 beyond
+        the mesh's pitch [rad] and its rate [rad/s]; None without controls."""
+        if self.controls is None:
+            return None
+        beta, rate = self.controls.pitch(t)
+        return -beta - self.mesh_pitch, -rate
+
+    def _generator_torque_row(self, t):
+        """The generator torque's generalized force on the generator-speed row, (t.shape)."""
+        if self.controls is None or not self.generator_free:
+            return 0.0
+        return -self.gearbox_ratio * self.controls.generator_torque(t)
 
     # ------------------------------------------------------------------ helpers
     def _split(self, x, n):
@@ -221,6 +263,9 @@ class RigidSystem:
         S = (Y @ self._tilt_rotation if self.tilt else Y) @ rot3(self.azimuth(t, q))
         H = S @ rot2(-qh)
         B = H[..., None, :, :] @ self.root_in_hub                       # (..., Nb, 3, 3)
+        turn = self.pitch_turn(t)
+        if turn is not None:
+            B = B @ rot1(turn[0])                                      # the pitch bearings
         out = {"Y": Y, "S": S, "H": H, "B": B}
         if Tt is not None:
             out["T"] = Tt
@@ -237,7 +282,8 @@ class RigidSystem:
         treat the returned dict as read-only)."""
         q, u, t = np.asarray(q), np.asarray(u), np.asarray(t)
         key = (q.dtype.str, q.shape, q.tobytes(), u.dtype.str, u.shape, u.tobytes(),
-               t.dtype.str, t.shape, t.tobytes())
+               t.dtype.str, t.shape, t.tobytes(),
+               None if self.controls is None else (id(self.controls), self.controls.version))
         cached = getattr(self, "_kin_cache", None)
         if cached is not None and cached[0] == key:
             return cached[1]
@@ -407,6 +453,9 @@ class RigidSystem:
             # shaft spring and damper on S about s3, reaction on the gearbox input E
             tau = -(self.k_shaft * k["qd"] + self.c_shaft * U3) * s3
             F = F + (k["wr_S"] - k["wr_E"]) @ tau
+        if self.controls is not None:
+            F = F + np.concatenate([[0.0, 0.0, 0.0, self._generator_torque_row(t)],
+                                    np.zeros(6)])
         res = F + Fstar
         return np.concatenate([self._join(res[0], res[1], res[2], res[3]), res[4:]])
 
@@ -445,14 +494,23 @@ class RigidSystem:
             B = k["fr"]["B"]
             v = np.einsum("kji,kj->ki", B, k["v_P"])
             w = np.einsum("kji,j->ki", B, k["w_H"])
-            return v, w
+            return v, self._with_pitch_rate(w, t)
         self._check_tower(tower)
         k = self._kin(q, u, t)
         B = k["fr"]["B"]
         Bt = np.swapaxes(B, -1, -2)
         v = _mv(Bt, k["v_P"])                                    # B^T v_P per blade
         w = _mv(Bt, k["w_H"][..., None, :])
-        return v, w
+        return v, self._with_pitch_rate(w, t)
+
+    def _with_pitch_rate(self, w, t):
+        """The root frames' angular velocities (..., Nb, 3) plus the pitch rate about b1."""
+        turn = self.pitch_turn(t)
+        if turn is None:
+            return w
+        w = w + 0 * turn[1][..., None]          # the pitch rate's batch shape, complex-safe
+        w[..., 0] = w[..., 0] + turn[1]
+        return w
 
     def root_points(self, q, t, tower=None):
         """(..., Nb, 3): the blade-root points P_k relative to the tower-top point TY [m],
@@ -560,6 +618,8 @@ class RigidSystem:
             # shaft spring and damper on S about s3, reaction on the gearbox input E
             tau = -(self.k_shaft * qd + self.c_shaft * U3)[..., None] * s3
             F = F + _mv(k["wr_S"] - k["wr_E"], tau)
+        if self.controls is not None:
+            F = F + self._rows(generator=self._generator_torque_row(t))
         res = F + Fstar
         return self._join(*(res[..., r] for r in range(4)))
 
