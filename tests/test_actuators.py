@@ -24,7 +24,6 @@ from hawt_core.io import dump_turbine, load_turbine, turbine_from_dict
 from hawt_core.numerics.rotations import rot1
 from hawt_core.rigid import ControlInputs
 from hawt_core.solvers.march import Simulator
-from hawt_core.solvers.steady import constant_steady_state
 from test_rotor_aero_states import mismatch, turbine_eigenvalues
 from test_turbine_aero import axisymmetric, nrel5mw
 

@@ -275,6 +275,23 @@ class BemRotor:
                            torque=torque, power=power, cp=power / (qa * U), ct=thrust / qa,
                            cq=torque / (qa * R), residual=residual)
 
+    def frozen_wake_power(self, wind_speed, rotor_speed, pitch, a, ap, rho: float = 1.225):
+        """Aerodynamic power [W] with the inductions ``a``, ``ap`` (stations on the last axis,
+        e.g. a BemSolution's) held: the loads of the blade elements at the inflow angle they
+        give, no momentum balance (the wake frozen: what the rotor feels in the seconds
+        before its inflow adapts, the sensitivity a pitch controller is designed on)."""
+        U, Om, th = (np.asarray(v, float)[..., None] for v in (wind_speed, rotor_speed, pitch))
+        cpc = np.cos(self.precone)
+        vx, vy = U * cpc * (1.0 - a), Om * self.r * cpc * (1.0 + ap)
+        phi = np.arctan2(vx, vy)
+        cl, cd, _ = self.polars.coefficients(phi - (self.twist + th))
+        tangential = (cl * np.sin(phi) - cd * np.cos(phi)) * 0.5 * rho * (vx * vx + vy * vy) \
+            * self.chord
+        rr = np.concatenate(([self.hub_radius], self.r, [self.tip_radius]))
+        pad = [(0, 0)] * (tangential.ndim - 1) + [(1, 1)]
+        torque = self.B * np.trapezoid(np.pad(tangential, pad) * rr * cpc, rr, axis=-1)
+        return torque * Om[..., 0]
+
     def tip_speed_ratio(self, wind_speed, rotor_speed):
         """Omega R_tip / U (R_tip: the blade tip's distance along the blade from the axis, as
         OpenFAST's and ROSCO's tables use)."""

@@ -224,11 +224,30 @@ def _schedule_defaults(s: dict) -> dict:
     return s
 
 
+#: --controller values that name a controller rather than a DISCON.IN file: "rosco" (the
+#: rosco wheel's DISCON.IN of a shipped turbine), "builtin" (hawt's own, control/builtin.py,
+#: on that file's schedule), "none" (no controller in the loop)
+CONTROLLER_NAMES = ("rosco", "builtin", "none")
+
+
+def controller_file(args):
+    """The DISCON.IN of --controller (a file, or "rosco"/"none"/absent: the shipped
+    turbine's from the rosco wheel), or None."""
+    from ..io.catalog import shipped_controller
+    name = args.controller
+    if name is not None and name not in CONTROLLER_NAMES:
+        return name
+    path = shipped_controller(args.turbine)
+    if path is None and name in ("rosco", "builtin"):
+        raise ValueError(f"--controller {name}: the rosco wheel ships no DISCON.IN for "
+                         f"{args.turbine!r}; give --controller DISCON.IN")
+    return path
+
+
 def controller_schedule(args):
     """(path, schedule) of --controller or the shipped turbine's DISCON.IN, or (None, None)."""
-    from ..io.catalog import shipped_controller
     from ..io.discon import discon_schedule
-    path = args.controller if args.controller is not None else shipped_controller(args.turbine)
+    path = controller_file(args)
     if path is None:
         return None, None
     return path, _schedule_defaults(discon_schedule(path))
@@ -282,17 +301,22 @@ def aero_model_args(p):
     """``--inflow`` and ``--airfoil``: the blades' aerodynamic model in wind
     (assembly/rotor_aero.py)."""
     from ..assembly.rotor_aero import AIRFOIL_MODELS, INFLOW_MODELS
-    p.add_argument("--inflow", choices=INFLOW_MODELS, default="frozen",
+    p.add_argument("--inflow", choices=INFLOW_MODELS, default=None,
                    help="with --wind: the inductions frozen at the operating point's BEM "
                         "state (default), or Oye's dynamic inflow (four states per blade "
-                        "element: the induction lags the loads)")
+                        "element: the induction lags the loads; the default of simulate "
+                        "with a controller in the loop, where pitch and rotor speed move)")
     p.add_argument("--airfoil", choices=AIRFOIL_MODELS, default="quasi-steady",
                    help="with --wind: polars at the quasi-steady angle of attack (default), "
                         "or Jones's two-state lag of the circulatory lift (attached flow)")
 
 
 def check_aero_model_args(args):
-    """--inflow/--airfoil other than the defaults need --wind."""
+    """--inflow/--airfoil other than the defaults need --wind.  An absent --inflow becomes
+    "frozen" (``args.inflow_given`` says whether it was given)."""
+    args.inflow_given = getattr(args, "inflow", None) is not None
+    if hasattr(args, "inflow") and args.inflow is None:
+        args.inflow = "frozen"
     if args.wind is None:
         for flag, v in (("--inflow", getattr(args, "inflow", "frozen") != "frozen"),
                         ("--airfoil", getattr(args, "airfoil", "quasi-steady")
@@ -318,9 +342,12 @@ def wind_args(p):
     p.add_argument("--shear", type=finite_float("--shear", minimum=0.0), default=0.0,
                    metavar="ALPHA", help="vertical power-law shear exponent (U at hub height; "
                    "heights from the tower's length), e.g. 0.2")
-    p.add_argument("--controller", default=None, metavar="DISCON.IN",
+    p.add_argument("--controller", default=None, metavar="DISCON.IN|rosco|builtin|none",
                    help="ROSCO controller file whose schedule sets the rotor speed and pitch "
-                        "at --wind (default for nrel5mw and iea15mw: the rosco wheel's)")
+                        "at --wind (default for nrel5mw and iea15mw, or 'rosco': the rosco "
+                        "wheel's); simulate: also runs that controller in the loop (a file or "
+                        "'rosco'; 'builtin': hawt's baseline controller on that schedule; "
+                        "'none': the rotor at the schedule's speed)")
     aero_model_args(p)
 
 

@@ -32,6 +32,15 @@ def cmd_simulate(args) -> int:
     wind = None
     if args.wind is not None:
         turbine, wind, _ = turbine_in_wind(args, turbine)
+    loop = args.controller is not None and args.controller != "none"
+    if args.plot and (not loop or not args.plot.lower().endswith(".png")):
+        raise ValueError(f"--plot: {args.plot!r} is not allowed; need a .png file, with "
+                         "--controller")
+    if loop:
+        if wind is None:
+            raise ValueError(f"--controller {args.controller}: a controller in the loop needs "
+                             "--wind U")
+        return _closed_loop(args, turbine, wind, duration)
     model = TurbineModel(turbine, elements=args.elements, wind=wind,
                          rotor_speed=None if wind is not None else args.rotor_speed,
                          inflow=args.inflow, airfoil=args.airfoil)
@@ -59,6 +68,72 @@ def cmd_simulate(args) -> int:
     return 0
 
 
+def _closed_loop(args, turbine, wind, duration) -> int:
+    """``simulate --wind U --controller rosco|FILE``: ROSCO in the loop (control/loop.py)."""
+    import json
+    from ..control.discon import DisconController
+    from ..control.loop import ActuatorLimits, ClosedLoop
+    from ..io.discon import discon_schedule, read_discon
+    from .aero import controller_file
+    if args.perturb:
+        raise ValueError("--perturb: not used with a controller in the loop (the run starts "
+                         "from the operating point)")
+    path = controller_file(args)
+    if path is None:
+        raise ValueError(f"--controller {args.controller}: no DISCON.IN for this turbine; give "
+                         "--controller DISCON.IN (its schedule also sets the built-in "
+                         "controller's rated power and speeds)")
+    schedule = discon_schedule(path)
+    if args.controller == "builtin":
+        from ..analyses.controller_design import builtin_gains
+        from ..control.builtin import BuiltinController
+        gains = builtin_gains(turbine, schedule)
+        controller = BuiltinController(gains, args.controller_step, turbine.rotor.blades)
+    else:
+        controller = DisconController(path, args.controller_step, turbine.rotor.blades)
+    status = ProgressLine(not args.quiet or args.progress, force=args.progress)
+    loop = None
+    try:
+        loop = ClosedLoop(turbine, wind, controller, dt=args.controller_step,
+                          efficiency=schedule["efficiency"],
+                          limits=ActuatorLimits.from_discon(read_discon(path)),
+                          elements=args.elements, inflow=args.inflow if args.inflow_given else "oye",
+                          airfoil=args.airfoil, step_deg=args.step_deg, method=args.method)
+        summary = loop.run(duration, progress=status if status.enabled else None)
+    finally:
+        status.close()
+        controller.close()
+        if loop is not None and args.output and loop.rows:
+            loop.save(args.output)           # what was simulated is kept, also on errors
+        if loop is not None and args.plot and len(loop.rows) > 1:
+            from ..results.plotting import plot_time_history
+            plot_time_history(loop.history(), args.plot,
+                              title=f"{turbine.name} under {args.controller}")
+    if args.plot:
+        summary["plot"] = args.plot
+    summary["controller"] = "builtin" if args.controller == "builtin" else str(path)
+    if args.output:
+        summary["output"] = args.output
+    if args.json:
+        print(json.dumps(summary, indent=1))
+    else:
+        fin = summary["final"]
+        print(f"simulated {summary['simulated_seconds']:.4g} s in {summary['wall_seconds']:.3g} s "
+              f"(real-time factor {summary['real_time_factor']:.3g}) under {summary['controller']}, "
+              f"{summary['controller_calls']} controller calls of {summary['controller_step']:.4g} s")
+        print(f"final: wind {fin['wind_speed']:.3g} m/s, rotor {fin['rotor_speed_rpm']:.4g} rpm, "
+              f"power {fin['generator_power_kw']:.5g} kW, pitch {fin['pitch1_deg']:.3g} deg, "
+              f"tip flap {fin['tip1_flap_m']:.3g} m")
+        if any(summary["clipped"].values()):
+            print("clipped demands: " + ", ".join(f"{k} {v}" for k, v in
+                                                   summary["clipped"].items()))
+        if args.output:
+            print(f"time histories written to {args.output}")
+        if args.plot:
+            print(f"summary plot written to {args.plot}")
+    return 0
+
+
 @cmd_simulate.arguments
 def _simulate_args(p):
     from .aero import wind_args
@@ -81,8 +156,15 @@ def _simulate_args(p):
                    help="Newton organization: 24 steps solved together (window, the default "
                         "for small and medium meshes) or one step at a time (step); the "
                         "results agree to the Newton tolerance")
+    p.add_argument("--controller-step", type=finite_float("--controller-step", unit="s"),
+                   default=0.05, metavar="S",
+                   help="with --controller: the controller's time step [s] (rounded to whole "
+                        "simulation steps; default 0.05)")
     p.add_argument("--output", "-o", default=None, metavar="FILE.csv|FILE.npz",
                    help="write the time histories (CSV with a header row, or NPZ)")
+    p.add_argument("--plot", default=None, metavar="FILE.png",
+                   help="with --controller: a summary plot (wind, rotor speed, power, pitch, "
+                        "torque, tip deflections against time)")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
     p.add_argument("--progress", action="store_true",
                    help="show the status line even when stderr is not a terminal")

@@ -526,3 +526,39 @@ def plot_campbell(result, path, max_hz=None, max_rays: int = 12, tracks="table2"
     fig.tight_layout()
     fig.subplots_adjust(right=0.78)
     return save_png(fig, path)
+
+
+def plot_time_history(history: dict, path, title: str = "") -> Path:
+    """Summary of a closed-loop run (control/loop.py ClosedLoop.history(): arrays by column
+    name) to the PNG file ``path``: wind and rotor speed, generator power, blade pitch and
+    generator torque, blade-tip flap deflections, against time."""
+    plt = _pyplot()
+    t = np.asarray(history["time"])
+    fig, axes = plt.subplots(4, 1, figsize=(8.0, 9.0), sharex=True)
+    ax = axes[0]
+    ax.plot(t, history["wind_speed"], color="tab:blue", label="hub wind [m/s]")
+    ax.set_ylabel("wind [m/s]")
+    ax2 = ax.twinx()
+    ax2.plot(t, history["rotor_speed_rpm"], color="tab:red", label="rotor [rpm]")
+    ax2.set_ylabel("rotor speed [rpm]", color="tab:red")
+    axes[1].plot(t, history["generator_power_kw"] / 1e3, color="tab:green")
+    axes[1].set_ylabel("generator power [MW]")
+    pitches = sorted(k for k in history if k.startswith("pitch") and k.endswith("_deg"))
+    for k in pitches:
+        axes[2].plot(t, history[k], label=k.replace("_deg", ""))
+    axes[2].set_ylabel("pitch [deg]")
+    ax3 = axes[2].twinx()
+    ax3.plot(t, history["generator_torque_knm"], color="k", lw=0.8, ls="--")
+    ax3.set_ylabel("generator torque [kN m] (dashed)")
+    for k in sorted(k for k in history if k.endswith("_flap_m")):
+        axes[3].plot(t, history[k], label=k.replace("_flap_m", ""))
+    axes[3].set_ylabel("tip flap [m]")
+    axes[3].set_xlabel("time [s]")
+    for a in axes:
+        a.grid(alpha=0.3)
+    if len(pitches) > 1:
+        axes[2].legend(fontsize=7, loc="lower right")
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    return save_png(fig, path)

@@ -416,6 +416,19 @@ class Simulator(StepSolver, SimulationOutputs):
             return zb + (zb - za) * (t - tb) / (tb - ta)
         return self._mid[-1][1].copy()
 
+    def advance(self, steps: int) -> None:
+        """Take exactly ``steps`` steps of the current size, no window reaching beyond them
+        (a controller changes the inputs after them: nothing may be solved ahead)."""
+        if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 0:
+            raise ValueError(f"steps: {steps!r} is not allowed; need an integer >= 0")
+        try:
+            for i in range(steps):
+                self._steps_wanted = steps - i
+                self.step()
+        finally:
+            self._steps_wanted = None
+        self._buffer = []
+
     def run(self, duration: float, progress: Optional[Callable] = None) -> dict:
         """Integrate for ``duration`` seconds (the last step is shortened to land on it, or
         lengthened by up to TAIL_STRETCH of a step).

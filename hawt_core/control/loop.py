@@ -1,0 +1,294 @@
+"""The closed loop: the turbine simulated in wind (solvers/march) with a controller commanding its
+pitch bearings and generator torque (rigid/actuators.py) once per controller step.
+
+Each controller step of ``dt`` (a whole number of simulation steps, so that the simulation
+lands on every call): the measurements at the step's start go to the controller, its demands
+are clipped to the actuator limits (counted and reported, never applied raw) and ramped in
+over the step (the actuators' first-order hold: one step of delay, ServoDyn's behaviour with
+no pitch-actuator model), then the turbine is simulated to the step's end.
+
+The rotor speed is free: the generator is the drivetrain's free generator (its torque from the
+controller), started from the operating point at the initial wind (rotor speed and pitch of
+the schedule, generator torque balancing the rotor's aerodynamic torque there).
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, replace
+from typing import Callable, Optional
+
+import numpy as np
+
+from ..assembly import TurbineModel
+from ..assembly.aero_blade import AeroelasticBlade
+from ..io.tables import write_table
+from ..numerics.rotations import rot1
+from ..rigid import ControlInputs
+from ..solvers.march import SimulationError, Simulator
+from ..solvers.periodic import periodic_steady_state
+from ..solvers.steady import constant_steady_state
+from .discon import Measurements
+
+__all__ = ["ActuatorLimits", "ClosedLoop", "free_generator"]
+
+
+@dataclass(frozen=True)
+class ActuatorLimits:
+    """Pitch range [rad, towards feather] and rate [rad/s], generator torque range [N m,
+    HSS] and rate [N m/s]; None: unlimited."""
+
+    pitch_min: float = -math.pi / 2
+    pitch_max: float = math.pi / 2
+    pitch_rate: Optional[float] = None
+    torque_max: Optional[float] = None
+    torque_rate: Optional[float] = None
+
+    @classmethod
+    def from_discon(cls, values: dict) -> "ActuatorLimits":
+        """From a DISCON.IN read by io.discon.read_discon (PC_MinPit, PC_MaxPit, PC_MaxRat,
+        VS_MaxTq, VS_MaxRat where present)."""
+        def num(k, default=None):
+            v = values.get(k)
+            return float(v) if isinstance(v, float) else default
+        return cls(pitch_min=num("PC_MinPit", -math.pi / 2),
+                   pitch_max=num("PC_MaxPit", math.pi / 2), pitch_rate=num("PC_MaxRat"),
+                   torque_max=num("VS_MaxTq"), torque_rate=num("VS_MaxRat"))
+
+    def clip(self, pitch, torque, last_pitch, last_torque, dt):
+        """(pitch, torque, what was clipped: list of field names)."""
+        clipped = []
+        p = np.asarray(pitch, float)
+        q = np.clip(p, self.pitch_min, self.pitch_max)
+        if self.pitch_rate is not None:
+            d = self.pitch_rate * dt
+            q = np.clip(q, last_pitch - d, last_pitch + d)
+        if np.any(q != p):
+            clipped.append("pitch")
+        tq = float(torque)
+        t2 = max(0.0, tq) if self.torque_max is None else min(max(0.0, tq), self.torque_max)
+        if self.torque_rate is not None:
+            d = self.torque_rate * dt
+            t2 = min(max(t2, last_torque - d), last_torque + d)
+        if t2 != tq:
+            clipped.append("torque")
+        return q, t2, clipped
+
+
+def free_generator(turbine):
+    """The turbine with its drivetrain's generator free (the rotor speed a DOF), the shaft
+    as the file has it; ValueError without a drivetrain."""
+    dt = turbine.drivetrain
+    if dt is None:
+        raise ValueError(f"turbine {turbine.name!r}: no drivetrain section, so no generator "
+                         "for a controller to drive")
+    return replace(turbine, drivetrain=replace(dt, generator="free"))
+
+
+#: Harmonics of the periodic state the closed loop starts from, and the interpolation error
+#: accepted (relative to the load scale): a start, not a result; the controller's transient
+#: follows anyway (4 harmonics: ~5 s for the NREL 5-MW at 4 elements, 48: ~50 s)
+INITIAL_HARMONICS, INITIAL_TOL = 4, 2e-2
+
+
+def initial_state(model) -> np.ndarray:
+    """The model's constant steady state, or (gravity, tilt, shear) its periodic state at
+    t = 0 with INITIAL_HARMONICS harmonics."""
+    try:
+        return constant_steady_state(model)
+    except ValueError:
+        ps = periodic_steady_state(model, harmonics=INITIAL_HARMONICS,
+                                   max_harmonics=INITIAL_HARMONICS,
+                                   interpolation_tol=INITIAL_TOL)
+        return ps.at(0.0)
+
+
+#: the columns of a closed-loop history, per blade k the pitch{k}_deg and tip deflections
+BASE_COLUMNS = ("time", "wind_speed", "rotor_speed_rpm", "generator_speed_rpm",
+                "generator_power_kw", "generator_torque_knm", "shaft_power_kw")
+
+
+class ClosedLoop:
+    """A turbine in wind under a controller.
+
+    ``turbine`` (at its initial operating point: ``rotor.speed``, ``rotor.pitch``); ``wind``
+    (aero.wind.Wind); ``controller``: an object with ``step(Measurements) -> Demands`` and
+    ``close()`` (control.discon.DisconController, control.builtin.BuiltinController) or None
+    (actuators held: constant pitch and generator torque); ``dt`` [s]: requested controller
+    step (rounded to whole simulation steps); ``efficiency`` [-] of the generator
+    (electrical / mechanical power); ``limits``: ActuatorLimits.  ``elements``, ``inflow``,
+    ``airfoil``, ``step_deg``, ``method``: as for TurbineModel and Simulator.
+    """
+
+    def __init__(self, turbine, wind, controller=None, dt: float = 0.05,
+                 efficiency: float = 1.0, limits: Optional[ActuatorLimits] = None,
+                 elements: Optional[int] = None, inflow: str = "oye",
+                 airfoil: str = "quasi-steady", step_deg: float = 1.0, method: str = "auto",
+                 rho: float = 1.225):
+        if not (np.isfinite(dt) and dt > 0):
+            raise ValueError(f"dt: {dt!r} is not allowed; need a controller step > 0 [s]")
+        if not 0 < efficiency <= 1:
+            raise ValueError(f"efficiency: {efficiency!r} is not allowed; need 0 < e <= 1")
+        turbine = free_generator(turbine)
+        if elements is not None:
+            turbine = turbine.with_elements(elements)
+        self.turbine = turbine
+        self.wind = wind
+        self.controller = controller
+        self.efficiency = float(efficiency)
+        self.limits = limits or ActuatorLimits()
+        nb = int(turbine.rotor.blades)
+        self.gearbox = float(turbine.drivetrain.gearbox_ratio)
+        pitch0 = -float(turbine.rotor.pitch)
+        # the initial state: the steady (or periodic) state with the generator held at the
+        # rotor speed, its torque the shaft's there, moved into the free generator's layout
+        # (in the steady wind of t = 0: a history or a gust would make it aperiodic)
+        steady = replace(wind, speed=float(wind.hub_speed(0.0)), history=(), gust=None)
+        held = TurbineModel(replace(turbine, drivetrain=replace(turbine.drivetrain,
+                                                                generator="prescribed")),
+                            wind=steady, rho=rho, inflow=inflow, airfoil=airfoil)
+        y_held = initial_state(held)
+        torque0 = self._holding_torque(held, y_held, rho)
+        self.inputs = ControlInputs(nb, pitch=pitch0, torque=torque0)
+        self.model = TurbineModel(turbine, wind=wind, rho=rho, inflow=inflow, airfoil=airfoil,
+                                  inductions=held.aero.inductions)
+        self.model.set_controls(self.inputs)
+        index = {name: i for i, name in enumerate(held.layout.names())}
+        y0 = np.array([y_held[index[name]] if name in index else 0.0
+                       for name in self.model.layout.names()])
+        self.sim = Simulator(self.model, step_deg=step_deg, method=method, record=False,
+                             y0=y0)
+        #: simulation steps per controller step, and the controller step [s]
+        self.substeps = max(1, int(round(dt / self.sim.h)))
+        self.dt = self.substeps * self.sim.h
+        self.omega0 = self.model.rotor_speed
+        lay = self.model.layout
+        self._i_gen = lay["generator_rate"]
+        self._i_twist = lay["shaft_twist_rate"] if "shaft_twist_rate" in lay else None
+        self._tips = [lay.blade(j).u[-1] for j in range(nb)]
+        self._roots = [lay.blade(j).root_moment for j in range(nb)]
+        self.clipped = {"pitch": 0, "torque": 0}
+        self.rows = []
+        self.wall_seconds = 0.0
+        self._last = (self.inputs.pitch(0.0)[0].copy(), torque0)
+        self._record()
+
+    def _holding_torque(self, held, y, rho) -> float:
+        """Generator torque [N m, HSS] that holds the rotor at its speed: the shaft's spring
+        torque in the held model's state, or (a rigid shaft) the rotor's aerodynamic torque
+        from the axisymmetric BEM steady state (assembly/aero_blade.py)."""
+        t = self.turbine
+        if t.drivetrain.stiffness is not None:
+            return max(0.0, float(t.drivetrain.stiffness) * float(y[held.layout["shaft_twist"]])
+                       / self.gearbox)
+        blade = AeroelasticBlade(t, float(np.real(self.wind.velocity(0.0, np.zeros(3))[2])),
+                                 elements=t.blade.elements, rho=rho)
+        q_blade, _ = blade.root_loads(blade.steady_state())
+        return max(0.0, t.rotor.blades * float(q_blade) / self.gearbox)
+
+    # ------------------------------------------------------------------ signals
+    def speeds(self):
+        """(rotor speed, generator speed) [rad/s] (generator on the high-speed shaft)."""
+        y = self.sim.y
+        u_gen = float(y[self._i_gen])
+        u_twist = float(y[self._i_twist]) if self._i_twist is not None else 0.0
+        return self.omega0 + u_gen + u_twist, self.gearbox * (self.omega0 + u_gen)
+
+    def hub_wind(self, t) -> float:
+        """Horizontal wind speed at the hub [m/s]."""
+        U = np.real(self.wind.velocity(t, np.zeros(3)))
+        return float(math.hypot(U[1], U[2]))
+
+    def measurements(self) -> Measurements:
+        t = self.sim.t
+        rotor, gen = self.speeds()
+        pitch = self.inputs.pitch(t)[0]
+        torque = float(self.inputs.generator_torque(t))
+        shaft = torque * gen
+        y = self.sim.y
+        # out-of-plane root bending: the root moment turned back from the pitched root frame
+        # into the hub's (coned) one, its component about b2
+        delta = self.model.rigid.pitch_turn(t)[0]
+        oop = np.array([float((rot1(d) @ y[r])[1]) for d, r in zip(delta, self._roots)])
+        az = float(np.real(self.model.rigid.azimuth(t, y[:self.model.nq]))) % (2 * math.pi)
+        return Measurements(time=t, pitch=pitch, generator_speed=gen, rotor_speed=rotor,
+                            generator_torque=torque, electrical_power=shaft * self.efficiency,
+                            shaft_power=shaft, hub_wind=self.hub_wind(t), azimuth=az,
+                            root_out_of_plane=oop)
+
+    def _record(self):
+        """One history row at the current instant (what the actuators do, not what was
+        demanded: the demands are ramped in over the step)."""
+        m = self.measurements()
+        y = self.sim.y
+        row = [m.time, m.hub_wind, m.rotor_speed * 30 / math.pi,
+               m.generator_speed * 30 / math.pi, m.electrical_power / 1e3,
+               m.generator_torque / 1e3, m.shaft_power / 1e3]
+        row += list(np.degrees(m.pitch))
+        for tip in self._tips:
+            row += [float(y[tip][2]), float(y[tip][1])]     # flap (b3), edge (b2) [m]
+        row += list(m.root_out_of_plane / 1e3)
+        if not np.all(np.isfinite(row)):
+            raise SimulationError(f"closed loop: non-finite signals at t = {m.time:.6g} s")
+        self.rows.append(row)
+
+    def columns(self) -> list:
+        nb = len(self._tips)
+        return (list(BASE_COLUMNS) + [f"pitch{k + 1}_deg" for k in range(nb)]
+                + [f"tip{k + 1}_{d}_m" for k in range(nb) for d in ("flap", "edge")]
+                + [f"root{k + 1}_out_of_plane_knm" for k in range(nb)])
+
+    # ------------------------------------------------------------------ running
+    def step(self) -> None:
+        """One controller step: measure, ask, clip, ramp in, simulate."""
+        t0 = self.sim.t
+        if self.controller is not None:
+            demands = self.controller.step(self.measurements())
+            pitch, torque, clipped = self.limits.clip(demands.pitch, demands.torque,
+                                                      self._last[0], self._last[1], self.dt)
+            for k in clipped:
+                self.clipped[k] += 1
+            self.inputs.command(t0, t0 + self.dt, pitch=pitch, torque=torque)
+            self._last = (pitch, torque)
+        self.sim.advance(self.substeps)
+        self._record()
+
+    def run(self, duration: float, progress: Optional[Callable] = None) -> dict:
+        """Simulate ``duration`` [s] (whole controller steps; on an error the history so far
+        is kept: save() it, then close()). Returns summary()."""
+        n = int(math.ceil(duration / self.dt - 1e-9))
+        w0 = time.perf_counter()
+        last = w0
+        try:
+            for i in range(n):
+                self.step()
+                if progress is not None and time.perf_counter() - last > 0.25:
+                    last = time.perf_counter()
+                    r = self.rows[-1]
+                    progress((i + 1) / n, f"t = {r[0]:.2f} s, {r[2]:.2f} rpm, "
+                                          f"{r[4]:.0f} kW, pitch {r[7]:.2f} deg")
+        finally:
+            self.wall_seconds += time.perf_counter() - w0
+        return self.summary()
+
+    def close(self) -> None:
+        if self.controller is not None:
+            self.controller.close()
+
+    def history(self) -> dict:
+        H = np.array(self.rows)
+        return {c: H[:, i] for i, c in enumerate(self.columns())}
+
+    def save(self, path) -> None:
+        """CSV (header row) or NPZ of the history (columns())."""
+        write_table(path, self.columns(), np.array(self.rows))
+
+    def summary(self) -> dict:
+        H = self.history()
+        sim = float(H["time"][-1] - H["time"][0])
+        last = {c: float(v[-1]) for c, v in H.items()}
+        return {"simulated_seconds": sim, "wall_seconds": self.wall_seconds,
+                "real_time_factor": sim / self.wall_seconds if self.wall_seconds else None,
+                "controller_step": self.dt, "controller_calls": len(self.rows) - 1,
+                "clipped": dict(self.clipped), "final": last}
+

@@ -1,0 +1,199 @@
+"""ROSCO in the loop (hawt_core.control): its DISCON library called through ctypes, driving the
+NREL 5-MW's pitch bearings and generator torque with the rotor speed free.
+
+References, each test stating its tolerance:
+* the deck's own controller file (the rosco wheel's NREL-5MW/DISCON.IN): rated generator
+  power VS_RtPwr and rated generator speed VS_RefSpd (5 MW, 1173.7 rpm = 12.1 rpm at the
+  rotor through WE_GearboxRatio = 97) above rated; the optimal tip-speed ratio VS_TSRopt
+  below rated;
+* ROSCO's own error messages (a DISCON.IN with a missing entry, from the wheel's examples).
+"""
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from hawt_core.aero.wind import Wind
+from hawt_core.cli import main
+from hawt_core.control.discon import (ControllerError, DisconController, Measurements,
+                                      rosco_library)
+from hawt_core.control.loop import ActuatorLimits, ClosedLoop
+from hawt_core.io.catalog import rosco_test_cases, shipped_controller
+from hawt_core.io.discon import read_discon
+from test_turbine_aero import nrel5mw
+
+pytestmark = pytest.mark.skipif(rosco_library() is None or shipped_controller("nrel5mw") is None,
+                                reason="the rosco wheel (libdiscon.so, DISCON.IN) is not installed")
+
+
+def discon():
+    return read_discon(shipped_controller("nrel5mw"))
+
+
+def test_rosco_holds_rated_power_and_speed_above_rated(tmp_path):
+    """Reference: DISCON.IN's VS_RtPwr and VS_RefSpd.  `hawt simulate nrel5mw --wind 15
+    --controller rosco` (4 elements, flexible tower, gravity, tilt, free yaw, Oye's inflow):
+    over the last 2 s of 6 s, mean generator power within 1 % of VS_RtPwr, mean rotor speed
+    within 1 % of VS_RefSpd / gearbox ratio, the generator speed the gearbox ratio times it
+    (1e-9), the pitch collective and above 5 deg; the CSV has the documented columns."""
+    out = tmp_path / "run.csv"
+    assert main(["simulate", "nrel5mw", "--wind", "15", "--controller", "rosco",
+                 "--duration", "6", "-n", "4", "-q", "--json", "-o", str(out)]) == 0
+    with open(out) as f:
+        rows = list(csv.DictReader(f))
+    cols = list(rows[0])
+    for c in ("time", "wind_speed", "rotor_speed_rpm", "generator_speed_rpm",
+              "generator_power_kw", "generator_torque_knm", "pitch1_deg", "pitch2_deg",
+              "pitch3_deg", "tip1_flap_m", "root1_out_of_plane_knm"):
+        assert c in cols
+    H = {c: np.array([float(r[c]) for r in rows]) for c in cols}
+    d = discon()
+    last = H["time"] > H["time"][-1] - 2.0
+    power = H["generator_power_kw"][last].mean() * 1e3
+    rpm = H["rotor_speed_rpm"][last].mean()
+    rated_rpm = d["VS_RefSpd"] / d["WE_GearboxRatio"] * 30 / math.pi
+    assert abs(power - d["VS_RtPwr"]) < 1e-2 * d["VS_RtPwr"]
+    assert abs(rpm - rated_rpm) < 1e-2 * rated_rpm
+    gen = H["generator_speed_rpm"]
+    # the generator turns at N times the gearbox input; the rotor adds the shaft's twist rate
+    assert np.all(np.abs(gen / d["WE_GearboxRatio"] - H["rotor_speed_rpm"]) < 0.05)
+    assert np.allclose(H["pitch1_deg"], H["pitch3_deg"]) and H["pitch1_deg"][-1] > 5.0
+
+
+def test_rosco_tracks_the_optimal_tip_speed_ratio_below_rated():
+    """Reference: DISCON.IN's VS_TSRopt (7.5).  NREL 5-MW at 8 m/s, 4 elements, rigid tower,
+    started at the schedule's optimal-TSR point: after 6 s under ROSCO the tip-speed ratio
+    is within 3 % of VS_TSRopt and the pitch at PC_FinePit within 0.1 deg."""
+    d = discon()
+    t = nrel5mw()
+    t = replace(t, tower=None)
+    R = t.hub.radius + t.blade.length
+    U = 8.0
+    omega = d["VS_TSRopt"] * U / R
+    t = replace(t, rotor=replace(t.rotor, speed=omega, pitch=-d["PC_FinePit"]))
+    path = shipped_controller("nrel5mw")
+    ctrl = DisconController(path, 0.05, 3)
+    loop = ClosedLoop(t, Wind(U), ctrl, dt=0.05, efficiency=d["VS_GenEff"] / 100,
+                      limits=ActuatorLimits.from_discon(d), elements=4)
+    try:
+        loop.run(6.0)
+    finally:
+        loop.close()
+    H = loop.history()
+    tsr = H["rotor_speed_rpm"][-1] * math.pi / 30 * R / U
+    assert abs(tsr - d["VS_TSRopt"]) < 3e-2 * d["VS_TSRopt"]
+    assert abs(H["pitch1_deg"][-1] - math.degrees(d["PC_FinePit"])) < 0.1
+
+
+def test_a_controller_failure_stops_with_its_message():
+    """ROSCO's own message for a DISCON.IN with a missing entry (the wheel's
+    example_inputs/minimal_DISCON_err.IN) ends the run as a ControllerError; the library is
+    not called again, closing is safe."""
+    bad = rosco_test_cases().parent / "example_inputs" / "minimal_DISCON_err.IN"
+    if not bad.is_file():
+        pytest.skip("the rosco wheel's example_inputs are not installed")
+    c = DisconController(bad, 0.05, 3)
+    m = Measurements(time=0.0, pitch=np.zeros(3), generator_speed=100.0, rotor_speed=1.0,
+                     generator_torque=4e4, electrical_power=4e6, shaft_power=4e6,
+                     hub_wind=10.0)
+    with pytest.raises(ControllerError, match="F_VSRefSpdCornerFreq"):
+        c.step(m)
+    with pytest.raises(ControllerError, match="failed before"):
+        c.step(m)
+    c.close()
+    c.close()
+
+
+def test_bad_controller_arguments_name_the_field(tmp_path):
+    with pytest.raises(ValueError, match="controller input file: .* not found"):
+        DisconController(tmp_path / "missing.IN", 0.05, 3)
+    with pytest.raises(ValueError, match="dt: 0.0 is not allowed"):
+        DisconController(shipped_controller("nrel5mw"), 0.0, 3)
+    with pytest.raises(ValueError, match="n_blades: 2 is not allowed"):
+        DisconController(shipped_controller("nrel5mw"), 0.05, 2)
+    with pytest.raises(ValueError, match="controller library: .* not found"):
+        DisconController(shipped_controller("nrel5mw"), 0.05, 3, library=tmp_path / "x.so")
+    assert main(["simulate", "nrel5mw", "--controller", "rosco", "--duration", "1"]) == 2
+    lim = ActuatorLimits(pitch_min=0.0, pitch_max=0.5, pitch_rate=0.1, torque_max=10.0)
+    p, q, clipped = lim.clip([0.7, -0.1, 0.02], 12.0, np.zeros(3), 9.0, 1.0)
+    assert np.allclose(p, [0.1, 0.0, 0.02]) and q == 10.0 and clipped == ["pitch", "torque"]
+
+
+#: Jonkman, Butterfield, Musial & Scott, "Definition of a 5-MW Reference Wind Turbine for
+#: Offshore System Development", NREL/TP-500-38060 (2009), Table 7-1: wind speed [m/s],
+#: region-3 pitch [deg] at rated speed and power, dP/dtheta [MW/rad] (FAST linearization,
+#: frozen wake).
+JONKMAN_TABLE_7_1 = np.array([
+    [12.0, 3.83, -43.73], [13.0, 6.60, -51.66], [14.0, 8.70, -58.44], [15.0, 10.45, -64.44],
+    [16.0, 12.06, -70.46], [17.0, 13.54, -76.53], [18.0, 14.92, -83.94],
+    [19.0, 16.23, -90.67], [20.0, 17.47, -94.71], [21.0, 18.70, -99.04],
+    [22.0, 19.94, -105.90], [23.0, 21.18, -114.30], [24.0, 22.35, -120.20],
+    [25.0, 23.47, -125.30]])
+
+
+def test_builtin_gains_follow_jonkmans_baseline_design():
+    """Reference: Jonkman et al. 2009 (NREL/TP-500-38060), section 7: drivetrain inertia
+    43,784,725 kg m^2 (1 %), region-2 gain 0.0255764 N m/rpm^2 (5 %: hawt's BEM Cp), Table
+    7-1's region-3 pitch (0.3 deg) and frozen-wake pitch sensitivity (5 %) at 12..25 m/s,
+    and the PI gains KP = 0.01882681 s, KI = 0.008068634 (10 %) and theta_K = 6.302336 deg
+    (15 %) that follow from them with w_n = 0.6 rad/s, zeta = 0.7 (the linear fit of the
+    sensitivity magnifies its differences)."""
+    from hawt_core.analyses.controller_design import (builtin_gains, pitch_sensitivity,
+                                                      rotor_inertia)
+    from hawt_core.io.discon import discon_schedule
+    t = nrel5mw()
+    s = discon_schedule(shipped_controller("nrel5mw"))
+    N = t.drivetrain.gearbox_ratio
+    J = rotor_inertia(t) + N * N * t.drivetrain.generator_inertia
+    assert abs(J - 43784725.0) < 1e-2 * 43784725.0
+    g = builtin_gains(t, s)
+    k_rpm = g.k_opt * (math.pi / 30) ** 2
+    assert abs(k_rpm - 0.0255764) < 5e-2 * 0.0255764
+    ps = pitch_sensitivity(t, s, winds=JONKMAN_TABLE_7_1[:, 0])
+    assert np.allclose(np.degrees(ps["pitch"]), JONKMAN_TABLE_7_1[:, 1], atol=0.3)
+    assert np.allclose(ps["dp_dtheta"] / 1e6, JONKMAN_TABLE_7_1[:, 2], rtol=5e-2)
+    assert abs(g.kp - 0.01882681) < 0.1 * 0.01882681
+    assert abs(g.ki - 0.008068634) < 0.1 * 0.008068634
+    assert abs(math.degrees(g.theta_k) - 6.302336) < 0.15 * 6.302336
+
+
+@pytest.mark.parametrize("kind", ["builtin", "rosco"])
+def test_a_wind_step_settles_at_rated_speed(kind):
+    """Reference: DISCON.IN's VS_RefSpd and VS_RtPwr.  NREL 5-MW on a rigid tower, 4
+    elements, Oye's inflow, 15 m/s stepping to 17 m/s over 0.5 s at t = 1 s: the rotor speed
+    rises (the step is felt: > 0.3 % above rated), then settles; over the last 2 s of 12 s
+    the mean rotor speed is within 1 % of rated and the mean generator power within 2 % of
+    rated, the pitch higher than at the start (more wind: more feather)."""
+    from hawt_core.analyses.controller_design import builtin_gains
+    from hawt_core.control.builtin import BuiltinController
+    from hawt_core.io.discon import discon_schedule
+    path = shipped_controller("nrel5mw")
+    d, s = discon(), discon_schedule(path)
+    t = replace(nrel5mw(), tower=None)
+    # the schedule's operating point at 15 m/s, as `hawt simulate --wind 15` starts from
+    from hawt_core.analyses.operating_points import operating_points
+    point = operating_points(t, [15.0], s).points[0]
+    t = replace(t, rotor=replace(t.rotor, speed=point["rotor_speed_rpm"] * math.pi / 30,
+                                 pitch=-math.radians(point["pitch_deg"])))
+    wind = Wind(15.0, history=((0.0, 1.0), (1.0, 1.0), (1.5, 17.0 / 15.0), (100.0, 17.0 / 15.0)))
+    ctrl = BuiltinController(builtin_gains(t, s), 0.05, 3) if kind == "builtin" \
+        else DisconController(path, 0.05, 3)
+    loop = ClosedLoop(t, wind, ctrl, dt=0.05, efficiency=s["efficiency"],
+                      limits=ActuatorLimits.from_discon(d), elements=4)
+    try:
+        loop.run(12.0)
+    finally:
+        loop.close()
+    H = loop.history()
+    rated_rpm = s["rated_speed"] * 30 / math.pi
+    assert H["wind_speed"][-1] == pytest.approx(17.0)
+    assert H["rotor_speed_rpm"].max() > 1.003 * rated_rpm
+    last = H["time"] > H["time"][-1] - 2.0
+    assert abs(H["rotor_speed_rpm"][last].mean() - rated_rpm) < 1e-2 * rated_rpm
+    assert abs(H["generator_power_kw"][last].mean() * 1e3 - s["rated_power"]) \
+        < 2e-2 * s["rated_power"]
+    assert H["pitch1_deg"][-1] > H["pitch1_deg"][0] + 1.0
