@@ -155,5 +155,7 @@ def test_controls_are_checked():
         c.command(0.0, 1.0, torque=float("nan"))
     model.set_controls(c)
     assert model.controls is c
+    with pytest.raises(ValueError, match="torque: 5.0 is not allowed; .* prescribed"):
+        c.command(0.0, 1.0, torque=5.0)
     model.set_controls(None)
     assert model.controls is None

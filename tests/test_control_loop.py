@@ -11,6 +11,7 @@ References, each test stating its tolerance:
 from __future__ import annotations
 
 import csv
+import json
 import math
 from dataclasses import replace
 
@@ -34,15 +35,20 @@ def discon():
     return read_discon(shipped_controller("nrel5mw"))
 
 
-def test_rosco_holds_rated_power_and_speed_above_rated(tmp_path):
+def test_rosco_holds_rated_power_and_speed_above_rated(tmp_path, capfd):
     """Reference: DISCON.IN's VS_RtPwr and VS_RefSpd.  `hawt simulate nrel5mw --wind 15
     --controller rosco` (4 elements, flexible tower, gravity, tilt, free yaw, Oye's inflow):
     over the last 2 s of 6 s, mean generator power within 1 % of VS_RtPwr, mean rotor speed
     within 1 % of VS_RefSpd / gearbox ratio, the generator speed the gearbox ratio times it
-    (1e-9), the pitch collective and above 5 deg; the CSV has the documented columns."""
+    (1e-9), the pitch collective and above 5 deg; the CSV has the documented columns, the
+    JSON on stdout is JSON alone (what ROSCO prints goes to stderr), the plot is written."""
     out = tmp_path / "run.csv"
     assert main(["simulate", "nrel5mw", "--wind", "15", "--controller", "rosco",
-                 "--duration", "6", "-n", "4", "-q", "--json", "-o", str(out)]) == 0
+                 "--duration", "6", "-n", "4", "-q", "--json", "-o", str(out),
+                 "--plot", str(tmp_path / "run.png")]) == 0
+    summary = json.loads(capfd.readouterr().out)
+    assert summary["controller"].endswith("DISCON.IN") and summary["controller_calls"] > 100
+    assert (tmp_path / "run.png").stat().st_size > 10000
     with open(out) as f:
         rows = list(csv.DictReader(f))
     cols = list(rows[0])

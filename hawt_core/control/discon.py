@@ -11,7 +11,9 @@ final call -1 (:meth:`DisconController.close`, also on errors).  ROSCO keeps its
 module variables and refuses a second initialisation in one process, so every controller
 loads its own copy of the library file (a temporary copy; removed on close).  ROSCO's
 debug files (``LoggingLevel`` > 0) go next to ``log_root`` (default: a temporary folder).
-What the library prints goes to stderr, never into a command's JSON on stdout.
+What the library prints goes to stderr, never into a command's JSON on stdout (file
+descriptor 1 is sent to 2 during each call, and the Fortran runtime flushed before it is
+given back).
 """
 from __future__ import annotations
 
@@ -151,6 +153,15 @@ class DisconController:
         self._fn.restype = None
         self._fn.argtypes = [ctypes.POINTER(ctypes.c_float), ctypes.POINTER(ctypes.c_int),
                              ctypes.c_char_p, ctypes.c_char_p, ctypes.c_char_p]
+        # the Fortran runtime's FLUSH (all units), found through the library's dependencies:
+        # when another package loaded that runtime first (SciPy bundles the same one), its
+        # preconnected units are buffered and would reach stdout after the redirection
+        try:
+            self._flush = self._lib._gfortran_flush_i4
+            self._flush.restype = None
+            self._flush.argtypes = [ctypes.c_void_p]
+        except AttributeError:
+            self._flush = None
         self.dt = float(dt)
         self.n_blades = int(n_blades)
         self.infile = infile
@@ -178,6 +189,8 @@ class DisconController:
         with _StdoutToStderr():
             self._fn(s.ctypes.data_as(ctypes.POINTER(ctypes.c_float)),
                      ctypes.byref(self._fail), self._in, self._out, self._msg)
+            if self._flush is not None:
+                self._flush(None)
         self.calls += 1
         msg = self._msg.value.decode(errors="replace").strip()
         if self._fail.value < 0:

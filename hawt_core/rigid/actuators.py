@@ -58,6 +58,9 @@ class ControlInputs:
         self.n_blades = int(n_blades)
         #: counts the commands (the rigid system's kinematics cache keys on it)
         self.version = 0
+        #: False once driving a turbine whose generator is held at the rotor speed (no
+        #: torque can act: RigidSystem.set_controls)
+        self.torque_allowed = True
         self._pitch = _Ramp(self._check_pitch(pitch))
         self._torque = _Ramp(self._check_torque(torque))
 
@@ -87,6 +90,10 @@ class ControlInputs:
         if pitch is not None:
             self._pitch.command(t0, t1, self._check_pitch(pitch))
         if torque is not None:
+            if not self.torque_allowed and torque != 0:
+                raise ValueError(f"torque: {torque!r} is not allowed; this turbine's generator "
+                                 "is held at the rotor speed (drivetrain.generator: "
+                                 "prescribed), so only 0 is")
             self._torque.command(t0, t1, self._check_torque(torque))
 
     def pitch(self, t):

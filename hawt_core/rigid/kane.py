@@ -202,6 +202,7 @@ class RigidSystem:
         if not self.generator_free and np.any(controls.generator_torque(0.0) != 0):
             raise ValueError("controls: a generator torque needs drivetrain.generator: free "
                              "(this turbine's generator turns at the prescribed speed)")
+        controls.torque_allowed = self.generator_free
         self.controls = controls
 
     def pitch_turn(self, t):
