@@ -34,12 +34,9 @@ class RotorGeometry:
 
     def q(self, named: dict) -> np.ndarray:
         """Rigid coordinates vector from Simulator.named()."""
-        out = []
-        if "yaw" in self.rigid.coordinates:
-            out.append(float(named.get("yaw", 0.0)))
-        if "teeter" in self.rigid.coordinates:
-            out.append(float(named.get("teeter", 0.0)))
-        return np.array(out, dtype=float)
+        # every coordinate the rigid system has, in its order (a drivetrain's shaft twist and
+        # generator azimuth when ``named`` carries them, e.g. ClosedLoop.named(); else 0)
+        return np.array([float(named.get(c, 0.0)) for c in self.rigid.coordinates], dtype=float)
 
     def frames(self, named: dict, t: float) -> dict:
         return self.rigid.frames(self.q(named), float(t))

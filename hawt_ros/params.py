@@ -61,6 +61,12 @@ PARAMETERS: Dict[str, Tuple[Any, str]] = {
     "perturb": ("", "initial perturbation, e.g. 'teeter=0.02,yaw_rate=0.01' "
                     f"(names: {', '.join(PERTURB_NAMES)})"),
     "marker_frame": ("nacelle", "frame of the blade markers: 'nacelle' or 'hub'"),
+    "wind": (0.0, "steady wind at hub height [m/s]; 0 = in a vacuum (the paper's model); > 0: "
+                  "the turbine operates in wind under `controller` (it needs an "
+                  "aerodynamics section and a drivetrain, e.g. turbine:=nrel5mw)"),
+    "controller": ("rosco", "with wind > 0: 'rosco' (the rosco wheel's DISCON.IN for the "
+                            "turbine), 'builtin' (hawt's baseline controller on that schedule) "
+                            "or a DISCON.IN path"),
 }
 
 #: Parameters that may change while the node runs; all others need a restart.
@@ -77,6 +83,8 @@ class NodeSettings:
     record: str = ""
     perturb: Mapping[str, float] = field(default_factory=dict)
     marker_frame: str = "nacelle"
+    wind: float = 0.0
+    controller: str = "rosco"
 
     def replace(self, **kw) -> "NodeSettings":
         return replace(self, **kw)
@@ -113,6 +121,7 @@ _RANGES = {
     "publish_rate": (0.0, False, 1000.0, "need a finite number > 0 and <= 1000 [Hz]"),
     "real_time_factor": (0.0, True, 1000.0, "need a finite number >= 0 and <= 1000 "
                          "(1 = wall clock, 0 = as fast as possible)"),
+    "wind": (0.0, True, 100.0, "need a finite number >= 0 and <= 100 [m/s] (0 = in a vacuum)"),
 }
 
 
@@ -151,6 +160,10 @@ def validate_parameter(name: str, value: Any) -> Any:
         return value.strip()
     if name == "perturb":
         return parse_perturb(value if value is not None else "")
+    if name == "controller":
+        if not isinstance(value, str) or not value.strip():
+            raise ParameterError(name, value, "need 'rosco', 'builtin' or a DISCON.IN path")
+        return value.strip()
     if name == "marker_frame":
         if value not in MARKER_FRAMES:
             raise ParameterError(name, value, f"choose one of {', '.join(MARKER_FRAMES)}")

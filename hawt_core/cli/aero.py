@@ -238,9 +238,10 @@ def controller_file(args):
     if name is not None and name not in CONTROLLER_NAMES:
         return name
     path = shipped_controller(args.turbine)
-    if path is None and name in ("rosco", "builtin"):
+    if path is None and name == "rosco":
         raise ValueError(f"--controller {name}: the rosco wheel ships no DISCON.IN for "
-                         f"{args.turbine!r}; give --controller DISCON.IN")
+                         f"{args.turbine!r}; give --controller DISCON.IN, or --controller "
+                         "builtin with --rated-power, --rated-rpm and --tsr-opt")
     return path
 
 
@@ -276,6 +277,8 @@ def turbine_in_wind(args, turbine):
     source = "given"
     if speed is None or pitch is None:
         path, schedule = controller_schedule(args)
+        if path is None and schedule_given(args):
+            path, schedule = "the given schedule", schedule_from_args(args)
         if path is not None:
             point = operating_points(turbine, [U], schedule).points[0]
             if not point["converged"]:
@@ -381,7 +384,7 @@ def schedule_from_args(args) -> dict:
     from ..io.catalog import shipped_controller
     from ..io.discon import discon_schedule
     path = args.controller
-    if path is None:
+    if path is None or path in CONTROLLER_NAMES:
         path = shipped_controller(args.turbine)
     s = discon_schedule(path) if path is not None else {}
     _schedule_defaults(s)
@@ -396,7 +399,7 @@ def schedule_from_args(args) -> dict:
     if missing:
         flags = {"rated_power": "--rated-power", "rated_speed": "--rated-rpm",
                  "tsr": "--tsr-opt"}
-        raise ValueError("operating-points: no controller file for this turbine; give "
+        raise ValueError(f"{args.command}: no controller file for this turbine; give "
                          "--controller DISCON.IN or " + ", ".join(flags[k] for k in missing))
     return s
 
@@ -416,15 +419,16 @@ def cmd_operating_points(args) -> int:
         turbine, args.wind, schedule, elements=args.elements, progress=status))
 
 
-@cmd_operating_points.arguments
-def _operating_points_args(p):
-    from .parser import elements_type
-    turbine_arg(p)
-    p.add_argument("--wind", type=grid_type("--wind", 0.1, 100.0, "m/s"), default="3:25:23",
-                   metavar="START:STOP:COUNT", help="wind speeds [m/s] (default 3:25:23)")
-    p.add_argument("--controller", default=None, metavar="DISCON.IN",
-                   help="ROSCO controller file with the schedule (default for nrel5mw and "
-                        "iea15mw: the rosco wheel's)")
+SCHEDULE_FLAGS = ("rated_power", "rated_rpm", "min_rpm", "tsr_opt", "efficiency", "fine_pitch")
+
+
+def schedule_given(args) -> bool:
+    """Whether any schedule flag (schedule_args) was given."""
+    return any(getattr(args, k, None) is not None for k in SCHEDULE_FLAGS)
+
+
+def schedule_args(p):
+    """The schedule's values as flags (operating-points; simulate's built-in controller)."""
     for flag, unit, what in (("--rated-power", "kW", "rated generator power"),
                              ("--rated-rpm", "rpm", "rated rotor speed"),
                              ("--min-rpm", "rpm", "minimum rotor speed"),
@@ -434,6 +438,18 @@ def _operating_points_args(p):
         p.add_argument(flag, type=finite_float(flag, unit=unit), default=None,
                        metavar=unit.upper() if unit != "-" else "X",
                        help=f"{what} [{unit}] (overrides the controller file's)")
+
+
+@cmd_operating_points.arguments
+def _operating_points_args(p):
+    from .parser import elements_type
+    turbine_arg(p)
+    p.add_argument("--wind", type=grid_type("--wind", 0.1, 100.0, "m/s"), default="3:25:23",
+                   metavar="START:STOP:COUNT", help="wind speeds [m/s] (default 3:25:23)")
+    p.add_argument("--controller", default=None, metavar="DISCON.IN",
+                   help="ROSCO controller file with the schedule (default for nrel5mw and "
+                        "iea15mw: the rosco wheel's)")
+    schedule_args(p)
     p.add_argument("--elements", "-n", type=elements_type, default=None, metavar="N",
                    help="elements per blade (default 16)")
     p.add_argument("--json", action="store_true",

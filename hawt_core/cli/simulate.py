@@ -23,8 +23,11 @@ def cmd_simulate(args) -> int:
     perturb = parse_perturb(args.perturb)
     if args.output and not args.output.lower().endswith((".csv", ".npz")):
         raise ValueError(f"output: {args.output!r} is not allowed; need a .csv or .npz file")
-    from .aero import check_wind_args, turbine_in_wind
+    from .aero import check_wind_args, schedule_given, turbine_in_wind
     check_wind_args(args)
+    if args.wind is None and schedule_given(args):
+        raise ValueError("--rated-power/--rated-rpm/--min-rpm/--tsr-opt/--efficiency/"
+                         "--fine-pitch: only used with --wind U")
     turbine = load(args.turbine)
     if args.lock_yaw:
         from dataclasses import replace
@@ -69,40 +72,35 @@ def cmd_simulate(args) -> int:
 
 
 def _closed_loop(args, turbine, wind, duration) -> int:
-    """``simulate --wind U --controller rosco|FILE``: ROSCO in the loop (control/loop.py)."""
+    """``simulate --wind U --controller rosco|builtin|FILE``: a controller in the loop
+    (analyses/closed_loop.py)."""
     import json
-    from ..control.discon import DisconController
-    from ..control.loop import ActuatorLimits, ClosedLoop
-    from ..io.discon import discon_schedule, read_discon
-    from .aero import controller_file
+    from ..analyses.closed_loop import closed_loop
+    from .aero import controller_file, schedule_from_args
     if args.perturb:
         raise ValueError("--perturb: not used with a controller in the loop (the run starts "
                          "from the operating point)")
     path = controller_file(args)
-    if path is None:
-        raise ValueError(f"--controller {args.controller}: no DISCON.IN for this turbine; give "
-                         "--controller DISCON.IN (its schedule also sets the built-in "
-                         "controller's rated power and speeds)")
-    schedule = discon_schedule(path)
-    if args.controller == "builtin":
-        from ..analyses.controller_design import builtin_gains
-        from ..control.builtin import BuiltinController
-        gains = builtin_gains(turbine, schedule)
-        controller = BuiltinController(gains, args.controller_step, turbine.rotor.blades)
-    else:
-        controller = DisconController(path, args.controller_step, turbine.rotor.blades)
+    kind = "builtin" if args.controller == "builtin" else "rosco"
+    if kind == "rosco" and path is None:
+        raise ValueError(f"--controller {args.controller}: no DISCON.IN for this turbine; "
+                         "give --controller DISCON.IN, or --controller builtin with "
+                         "--rated-power, --rated-rpm and --tsr-opt")
+    schedule = schedule_from_args(args) if kind == "builtin" else None
     status = ProgressLine(not args.quiet or args.progress, force=args.progress)
     loop = None
     try:
-        loop = ClosedLoop(turbine, wind, controller, dt=args.controller_step,
-                          efficiency=schedule["efficiency"],
-                          limits=ActuatorLimits.from_discon(read_discon(path)),
-                          elements=args.elements, inflow=args.inflow if args.inflow_given else "oye",
-                          airfoil=args.airfoil, step_deg=args.step_deg, method=args.method)
+        # the turbine is already at the schedule's operating point (turbine_in_wind)
+        loop = closed_loop(turbine, wind, kind, discon=path, schedule=schedule,
+                           dt=args.controller_step, elements=args.elements,
+                           inflow=args.inflow if args.inflow_given else "oye",
+                           airfoil=args.airfoil, step_deg=args.step_deg, method=args.method,
+                           operating_point=False)
         summary = loop.run(duration, progress=status if status.enabled else None)
     finally:
         status.close()
-        controller.close()
+        if loop is not None:
+            loop.close()
         if loop is not None and args.output and loop.rows:
             loop.save(args.output)           # what was simulated is kept, also on errors
         if loop is not None and args.plot and len(loop.rows) > 1:
@@ -111,7 +109,7 @@ def _closed_loop(args, turbine, wind, duration) -> int:
                               title=f"{turbine.name} under {args.controller}")
     if args.plot:
         summary["plot"] = args.plot
-    summary["controller"] = "builtin" if args.controller == "builtin" else str(path)
+    summary["controller"] = "builtin" if kind == "builtin" else str(path)
     if args.output:
         summary["output"] = args.output
     if args.json:
@@ -136,7 +134,7 @@ def _closed_loop(args, turbine, wind, duration) -> int:
 
 @cmd_simulate.arguments
 def _simulate_args(p):
-    from .aero import wind_args
+    from .aero import schedule_args, wind_args
     turbine_arg(p)
     wind_args(p)
     p.add_argument("--rotor-speed", type=rotor_speed_type, default=None, metavar="RAD_PER_S",
@@ -156,6 +154,7 @@ def _simulate_args(p):
                    help="Newton organization: 24 steps solved together (window, the default "
                         "for small and medium meshes) or one step at a time (step); the "
                         "results agree to the Newton tolerance")
+    schedule_args(p)
     p.add_argument("--controller-step", type=finite_float("--controller-step", unit="s"),
                    default=0.05, metavar="S",
                    help="with --controller: the controller's time step [s] (rounded to whole "

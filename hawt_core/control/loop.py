@@ -117,14 +117,18 @@ class ClosedLoop:
     (actuators held: constant pitch and generator torque); ``dt`` [s]: requested controller
     step (rounded to whole simulation steps); ``efficiency`` [-] of the generator
     (electrical / mechanical power); ``limits``: ActuatorLimits.  ``elements``, ``inflow``,
-    ``airfoil``, ``step_deg``, ``method``: as for TurbineModel and Simulator.
+    ``airfoil``, ``step_deg``, ``method``: as for TurbineModel and Simulator.  ``record``
+    False keeps only the last history row (a node running for hours).
+
+    It offers what a Simulator offers a caller that steps and reads it (the ROS node):
+    ``step()`` (one controller step of ``dt``), ``t``, ``named()``, ``blade_deflections()``.
     """
 
     def __init__(self, turbine, wind, controller=None, dt: float = 0.05,
                  efficiency: float = 1.0, limits: Optional[ActuatorLimits] = None,
                  elements: Optional[int] = None, inflow: str = "oye",
                  airfoil: str = "quasi-steady", step_deg: float = 1.0, method: str = "auto",
-                 rho: float = 1.225):
+                 rho: float = 1.225, record: bool = True):
         if not (np.isfinite(dt) and dt > 0):
             raise ValueError(f"dt: {dt!r} is not allowed; need a controller step > 0 [s]")
         if not 0 < efficiency <= 1:
@@ -167,7 +171,12 @@ class ClosedLoop:
         self._i_twist = lay["shaft_twist_rate"] if "shaft_twist_rate" in lay else None
         self._tips = [lay.blade(j).u[-1] for j in range(nb)]
         self._roots = [lay.blade(j).root_moment for j in range(nb)]
+        self._tower = lay.tower() if lay.has_tower else None
+        #: (time, the tower top's inertial velocity, its acceleration) at the last
+        #: measurement (the fore-aft and side-side accelerations ROSCO reads)
+        self._top_velocity = None
         self.clipped = {"pitch": 0, "torque": 0}
+        self.record = bool(record)
         self.rows = []
         self.wall_seconds = 0.0
         self._last = (self.inputs.pitch(0.0)[0].copy(), torque0)
@@ -214,7 +223,29 @@ class ClosedLoop:
         return Measurements(time=t, pitch=pitch, generator_speed=gen, rotor_speed=rotor,
                             generator_torque=torque, electrical_power=shaft * self.efficiency,
                             shaft_power=shaft, hub_wind=self.hub_wind(t), azimuth=az,
-                            root_out_of_plane=oop)
+                            root_out_of_plane=oop,
+                            tower_top_acceleration=self._top_acceleration(t))
+
+    def _top_acceleration(self, t) -> tuple:
+        """(fore-aft, side-side) [m/s^2] of the tower top: the change of its inertial
+        velocity over the last controller step, along the nacelle's y3 (downwind) and y2;
+        (0, 0) with a rigid tower or at the first call."""
+        if self._tower is None:
+            return (0.0, 0.0)
+        y = self.sim.y
+        m = self.model
+        top = np.stack([y[self._tower.theta[-1]], y[self._tower.V[-1]], y[self._tower.Omega[-1]]])
+        fr = m.rigid.frames(y[:m.nq], t, top)
+        v = fr["T"] @ top[1]                                   # inertial components
+        last = self._top_velocity
+        if last is not None and t == last[0]:
+            return last[2]                  # asked again at the same instant (the record)
+        acc = (0.0, 0.0)
+        if last is not None and t > last[0]:
+            a = (v - last[1]) / (t - last[0])
+            acc = (float(a @ fr["Y"][:, 2]), float(a @ fr["Y"][:, 1]))
+        self._top_velocity = (t, v, acc)
+        return acc
 
     def _record(self):
         """One history row at the current instant (what the actuators do, not what was
@@ -228,15 +259,49 @@ class ClosedLoop:
         for tip in self._tips:
             row += [float(y[tip][2]), float(y[tip][1])]     # flap (b3), edge (b2) [m]
         row += list(m.root_out_of_plane / 1e3)
+        if self._tower is not None:
+            # the tower's loads on the ground, root frame t (t1 up, t2 lateral, t3 downwind):
+            # fore-aft bending about t2, side-side about t3
+            M = y[self._tower.root_moment]
+            row += [float(M[1]) / 1e3, float(M[2]) / 1e3]
         if not np.all(np.isfinite(row)):
             raise SimulationError(f"closed loop: non-finite signals at t = {m.time:.6g} s")
+        if not self.record:
+            self.rows.clear()
         self.rows.append(row)
+
+    # ------------------------------------------------------------------ as a Simulator
+    @property
+    def t(self) -> float:
+        """Simulation time [s]."""
+        return self.sim.t
+
+    def named(self) -> dict:
+        """The simulator's named scalars (time, azimuth, yaw, teeter and rates), plus every
+        rigid coordinate by name (the drivetrain's ``shaft_twist``, ``generator_azimuth``) and
+        the ``rotor_speed`` [rad/s]."""
+        out = self.sim.named()
+        out["rotor_speed"] = self.speeds()[0]
+        y = self.sim.y
+        for i, c in enumerate(self.model.rigid.coordinates):
+            out.setdefault(c, float(y[i]))
+        return out
+
+    def blade_deflections(self) -> list:
+        """The simulator's blade deflections and root loads (Simulator.blade_deflections)."""
+        return self.sim.blade_deflections()
+
+    def last(self) -> dict:
+        """The last history row by column name."""
+        return dict(zip(self.columns(), self.rows[-1]))
 
     def columns(self) -> list:
         nb = len(self._tips)
         return (list(BASE_COLUMNS) + [f"pitch{k + 1}_deg" for k in range(nb)]
                 + [f"tip{k + 1}_{d}_m" for k in range(nb) for d in ("flap", "edge")]
-                + [f"root{k + 1}_out_of_plane_knm" for k in range(nb)])
+                + [f"root{k + 1}_out_of_plane_knm" for k in range(nb)]
+                + (["tower_base_fore_aft_knm", "tower_base_side_side_knm"]
+                   if self._tower is not None else []))
 
     # ------------------------------------------------------------------ running
     def step(self) -> None:

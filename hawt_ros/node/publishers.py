@@ -98,7 +98,8 @@ class StatePublisher:
         js.header = Header(stamp=stamp, frame_id="")
         js.name = list(JOINT_NAMES)
         js.position = [wrap_pi(yaw), teeter, azimuth % (2 * math.pi)]
-        js.velocity = [yaw_rate, teeter_rate, self.omega]
+        # the rotor's actual speed where the simulation has a free one (ClosedLoop.named)
+        js.velocity = [yaw_rate, teeter_rate, float(named.get("rotor_speed", self.omega))]
         js.effort = [float(x) for x in loads]
         self._emit(self.pub_joints, js, stamp_ns)
 

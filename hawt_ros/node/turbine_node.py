@@ -72,7 +72,6 @@ class HawtNode(Pacing, StatePublisher, Recording, AnalysisServer, Node):
         self._warn_unknown_overrides()
 
         # ---------------------------------------------------------------- model
-        from hawt_core.assembly import TurbineModel
         from hawt_core.io import TurbineFileError
         from hawt_core.io.catalog import SHIPPED, load_any, shipped_path
 
@@ -90,31 +89,14 @@ class HawtNode(Pacing, StatePublisher, Recording, AnalysisServer, Node):
             self.turbine_path = str(shipped_path(path))
         else:
             self.turbine_path = str(Path(path).resolve())
-        self.get_logger().info(
-            f"turbine '{self.turbine.name}' read; building its model "
-            f"({self.settings.elements or self.turbine.blade.elements} elements per blade) and "
-            "the steady state (Ctrl-C stops)")
-        try:
-            self.model = TurbineModel(self.turbine, elements=self.settings.elements or None)
-        except (ValueError, NotImplementedError) as exc:
-            raise StartupError(f"turbine {self.turbine_path}: {exc}") from None
+        if self.settings.wind > 0:
+            self._build_closed_loop(path)
+        else:
+            self._build_simulation()
         self.omega = float(self.model.rotor_speed)
-        if self.omega <= 0:
-            raise StartupError(f"turbine {self.turbine_path}: rotor speed {self.omega} rad/s; "
-                               "the simulation needs a spinning rotor (speed > 0)")
-        self.dt = math.radians(self.settings.step_deg) / self.omega
         self.geometry = RotorGeometry(self.model.rigid)
         self.n_blades = int(self.model.n_blades)
         self._analysis_elements = int(self.model.beam.N)
-
-        sim_be = load_backend("simulate")
-        self.sim_source = sim_be.source
-        self._SimulationError = sim_be.SimulationError
-        try:   # no time histories: the node runs for hours
-            self.sim = sim_be.Simulator(self.model, step_deg=self.settings.step_deg,
-                                        perturb=dict(self.settings.perturb), record=False)
-        except Exception as exc:  # noqa: BLE001
-            raise StartupError(f"simulation set-up failed: {type(exc).__name__}: {exc}") from None
 
         # ---------------------------------------------------------------- interfaces
         self._sim_group = MutuallyExclusiveCallbackGroup()
@@ -166,6 +148,67 @@ class HawtNode(Pacing, StatePublisher, Recording, AnalysisServer, Node):
             f"publishing at {s.publish_rate:g} Hz, real_time_factor {s.real_time_factor:g}"
             + (" (stamps in simulation time, /clock published)" if s.real_time_factor == 0 else "")
             + (f"; recording to {self.record_path}" if self.recorder else ""))
+
+    def _build_simulation(self) -> None:
+        """The paper's model in a vacuum: TurbineModel and Simulator (or the fake backend)."""
+        from hawt_core.assembly import TurbineModel
+
+        self.get_logger().info(
+            f"turbine '{self.turbine.name}' read; building its model "
+            f"({self.settings.elements or self.turbine.blade.elements} elements per blade) and "
+            "the steady state (Ctrl-C stops)")
+        try:
+            self.model = TurbineModel(self.turbine, elements=self.settings.elements or None)
+        except (ValueError, NotImplementedError) as exc:
+            raise StartupError(f"turbine {self.turbine_path}: {exc}") from None
+        omega = float(self.model.rotor_speed)
+        if omega <= 0:
+            raise StartupError(f"turbine {self.turbine_path}: rotor speed {omega} rad/s; "
+                               "the simulation needs a spinning rotor (speed > 0)")
+        self.dt = math.radians(self.settings.step_deg) / omega
+        sim_be = load_backend("simulate")
+        self.sim_source = sim_be.source
+        self._SimulationError = sim_be.SimulationError
+        try:   # no time histories: the node runs for hours
+            self.sim = sim_be.Simulator(self.model, step_deg=self.settings.step_deg,
+                                        perturb=dict(self.settings.perturb), record=False)
+        except Exception as exc:  # noqa: BLE001
+            raise StartupError(f"simulation set-up failed: {type(exc).__name__}: {exc}") from None
+
+    def _build_closed_loop(self, spec) -> None:
+        """The turbine operating in the steady wind ``wind`` under ``controller``, from the
+        schedule's operating point (hawt_core.analyses.closed_loop); one simulation step of
+        the node is one controller step."""
+        from hawt_core.aero.wind import Wind
+        from hawt_core.analyses.closed_loop import closed_loop
+        from hawt_core.io.catalog import shipped_controller
+        from hawt_core.solvers.march import SimulationError
+        s = self.settings
+        name = s.controller
+        discon = shipped_controller(spec or "") if name in ("rosco", "builtin") else name
+        if discon is None:
+            raise StartupError(f"parameter controller: {name!r}: the rosco wheel ships no "
+                               f"DISCON.IN for turbine {self.turbine_path}; give a DISCON.IN "
+                               "path")
+        if s.perturb:
+            raise StartupError("parameter perturb: not used with wind > 0 (the turbine starts "
+                               "at its operating point)")
+        self.get_logger().info(
+            f"turbine '{self.turbine.name}' read; finding its operating point at {s.wind:g} m/s "
+            f"and starting it under {name} ({s.elements or self.turbine.blade.elements} "
+            "elements per blade; Ctrl-C stops)")
+        try:
+            self.sim = closed_loop(self.turbine, Wind(float(s.wind)),
+                                   "builtin" if name == "builtin" else "rosco",
+                                   discon=discon, elements=s.elements or None,
+                                   step_deg=s.step_deg, record=False)
+        except Exception as exc:  # noqa: BLE001
+            raise StartupError(f"closed-loop set-up failed: {type(exc).__name__}: {exc}") \
+                from None
+        self.model = self.sim.model
+        self.dt = self.sim.dt
+        self.sim_source = f"closed loop in {s.wind:g} m/s wind under {name} ({discon})"
+        self._SimulationError = SimulationError
 
     def _warn_unknown_overrides(self) -> None:
         overrides = getattr(self, "_parameter_overrides", {}) or {}
@@ -259,3 +302,9 @@ class HawtNode(Pacing, StatePublisher, Recording, AnalysisServer, Node):
         self.runner.shutdown()
         with self._lock:
             self._stop_recording()
+            close = getattr(self.sim, "close", None)     # a controller's final call
+            if close is not None:
+                try:
+                    close()
+                except Exception as exc:  # noqa: BLE001 - shutting down: report, go on
+                    self.get_logger().warning(f"controller close failed: {exc}")
