@@ -67,10 +67,13 @@ PARAMETERS: Dict[str, Tuple[Any, str]] = {
     "controller": ("rosco", "with wind > 0: 'rosco' (the rosco wheel's DISCON.IN for the "
                             "turbine), 'builtin' (hawt's baseline controller on that schedule) "
                             "or a DISCON.IN path"),
+    "override_timeout": (1.0, "with wind > 0: seconds without a pitch_command / "
+                              "torque_command after which the controller takes over again"),
 }
 
 #: Parameters that may change while the node runs; all others need a restart.
-RUNTIME_CHANGEABLE = ("publish_rate", "real_time_factor", "record", "marker_frame")
+RUNTIME_CHANGEABLE = ("publish_rate", "real_time_factor", "record", "marker_frame",
+                      "override_timeout")
 
 
 @dataclass(frozen=True)
@@ -85,6 +88,7 @@ class NodeSettings:
     marker_frame: str = "nacelle"
     wind: float = 0.0
     controller: str = "rosco"
+    override_timeout: float = 1.0
 
     def replace(self, **kw) -> "NodeSettings":
         return replace(self, **kw)
@@ -122,6 +126,7 @@ _RANGES = {
     "real_time_factor": (0.0, True, 1000.0, "need a finite number >= 0 and <= 1000 "
                          "(1 = wall clock, 0 = as fast as possible)"),
     "wind": (0.0, True, 100.0, "need a finite number >= 0 and <= 100 [m/s] (0 = in a vacuum)"),
+    "override_timeout": (0.0, False, 3600.0, "need a finite number > 0 and <= 3600 [s]"),
 }
 
 

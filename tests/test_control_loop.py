@@ -229,3 +229,37 @@ def test_builtin_controller_without_a_controller_file(tmp_path, capfd):
     assert main(["simulate", str(path), "--wind", "15", "--controller", "rosco",
                  "--duration", "1"] + flags) == 2
     assert "--controller builtin with --rated-power" in capfd.readouterr().err
+
+
+def test_overrides_replace_the_controller_within_the_limits():
+    """ClosedLoop.set_override (what the node's pitch_command/torque_command call): a torque
+    of 1e6 N m is clipped to DISCON.IN's VS_MaxTq (and its rate VS_MaxRat) and counted, never
+    applied raw; a pitch override is followed at PC_MaxRat; clear_override gives both back
+    to ROSCO (its torque back at VS_RtTq within 2 % in 20 steps); a wrongly sized pitch is
+    refused naming the field."""
+    d = discon()
+    t = replace(nrel5mw(), tower=None)
+    from hawt_core.analyses.closed_loop import closed_loop
+    loop = closed_loop(t, Wind(15.0), "rosco", discon=shipped_controller("nrel5mw"),
+                       elements=4, record=True)
+    try:
+        loop.run(0.2)
+        p0 = loop.last()["pitch1_deg"]
+        loop.set_override(torque=1e6, pitch=math.radians(p0) + 0.05)
+        for _ in range(10):
+            loop.step()
+            assert loop.last()["generator_torque_knm"] * 1e3 <= d["VS_MaxTq"] + 1e-6
+        assert loop.clipped["torque"] >= 10 and "torque" in loop.last_clipped
+        H = loop.history()
+        rate = np.diff(np.radians(H["pitch1_deg"][-10:])) / loop.dt
+        assert np.all(rate <= d["PC_MaxRat"] * (1 + 1e-9))
+        loop.clear_override()
+        assert loop.override == {"pitch": None, "torque": None}
+        for _ in range(20):
+            loop.step()
+        assert abs(loop.last()["generator_torque_knm"] * 1e3 - d["VS_RtTq"]) \
+            < 2e-2 * d["VS_RtTq"]
+        with pytest.raises(ValueError, match="pitch: .* is not allowed"):
+            loop.set_override(pitch=[0.1, 0.2])
+    finally:
+        loop.close()

@@ -947,16 +947,52 @@ def test_node_in_wind_operates_the_nrel5mw_under_rosco(spawn):
     point under ROSCO and publishes the blades deflected by the wind: blade 0's tip flap
     (out of plane, b3) above 1 m where the vacuum's is ~0 (reference: the aeroelastic steady
     state at 15 m/s, 3-5 m at this mesh, tests/test_control_loop.py); the rotor turns near
-    rated speed (12.1 rpm within 5 %); bounded: at most 120 s."""
+    rated speed (12.1 rpm within 5 %); joint_states carry each blade's pitch and the
+    generator.  An external node's pitch_command (real DDS, loopback) takes the pitch: it
+    moves to the command; a command below PC_MinPit (0) is clipped there and reported; after override_timeout of silence ROSCO has the pitch
+    again (logged, the pitch leaves the command).  Bounded: at most ~250 s."""
     pytest.importorskip("rosco")
+    from std_msgs.msg import Float64MultiArray
     node, cli = spawn({"turbine": "nrel5mw", "wind": 15.0, "elements": 4, "step_deg": 1.0,
-                       "real_time_factor": 0.0, "publish_rate": 5.0})
+                       "real_time_factor": 0.0, "publish_rate": 5.0,
+                       "override_timeout": 3.0})
     bd = cli.subscribe(BladeDeflection, "/blade_deflections")
     js = cli.subscribe(JointState, "/joint_states")
     first_message(node, bd, timeout=120.0)
     wait_until(lambda: len(js) >= 3, 60.0, what="joint states")
     tip = [m for m in bd.msgs() if m.blade == 0][-1].displacement[-1]
     assert tip.z > 1.0, node.log()
-    speed = js.msgs()[-1].velocity[2]
+    last = js.msgs()[-1]
+    assert list(last.name) == ["yaw", "teeter", "rotor_azimuth", "blade_0_pitch",
+                               "blade_1_pitch", "blade_2_pitch", "generator"]
+    speed = last.velocity[2]
     assert abs(speed * 30 / math.pi - 12.1) < 0.05 * 12.1, node.log()
+    assert abs(last.velocity[6] / speed - 97.0) < 0.5           # the gearbox ratio
     assert "closed loop in 15 m/s wind under rosco" in node.log()
+    pitch0 = last.position[3]
+
+    pub = cli.node.create_publisher(Float64MultiArray, "/pitch_command", 10)
+    target = pitch0 + 0.1                                          # ~6 deg more feather
+
+    def pitch_now():
+        return js.msgs()[-1].position[3]
+
+    def send(value, seconds):
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            pub.publish(Float64MultiArray(data=[value]))
+            time.sleep(0.2)
+
+    sender = threading.Thread(target=send, args=(target, 25.0), daemon=True)
+    sender.start()
+    wait_until(lambda: abs(pitch_now() - target) < 2e-3, 60.0, what="pitch at the command")
+    sender.join()
+    # below PC_MinPit (0 rad): the pitch runs down at the rate limit and stops at 0
+    sender = threading.Thread(target=send, args=(-1.0, 40.0), daemon=True)
+    sender.start()
+    wait_until(lambda: abs(pitch_now()) < 1e-9, 60.0, what="pitch at PC_MinPit")
+    sender.join()
+    assert min(m.position[3] for m in js.msgs()) >= -1e-12
+    assert "command clipped (pitch)" in node.log()
+    wait_until(lambda: "the controller (rosco) has the pitch again" in node.log(), 30.0,
+               what="release after the timeout")

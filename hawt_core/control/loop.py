@@ -176,6 +176,11 @@ class ClosedLoop:
         #: measurement (the fore-aft and side-side accelerations ROSCO reads)
         self._top_velocity = None
         self.clipped = {"pitch": 0, "torque": 0}
+        #: what the last controller step clipped (field names)
+        self.last_clipped = []
+        #: demands that replace the controller's (set_override): pitch (Nb,) [rad], torque
+        #: [N m]; None: the controller's
+        self.override = {"pitch": None, "torque": None}
         self.record = bool(record)
         self.rows = []
         self.wall_seconds = 0.0
@@ -304,15 +309,50 @@ class ClosedLoop:
                    if self._tower is not None else []))
 
     # ------------------------------------------------------------------ running
+    def set_override(self, pitch=None, torque=None) -> None:
+        """Replace the controller's pitch (one angle or one per blade [rad, towards
+        feather]) and/or generator torque [N m, HSS] from the next step on (None: leave that
+        one as it is; clear_override gives it back); clipped to the limits like the
+        controller's demands, never applied raw."""
+        if pitch is not None:
+            p = np.asarray(pitch, float)
+            p = np.full(self.inputs.n_blades, float(p)) if p.ndim == 0 else p
+            if p.shape != (self.inputs.n_blades,) or not np.all(np.isfinite(p)):
+                raise ValueError(f"pitch: {np.asarray(pitch).tolist()!r} is not allowed; need "
+                                 f"one finite angle [rad] or {self.inputs.n_blades}")
+            self.override["pitch"] = p
+        if torque is not None:
+            if not np.isfinite(torque):
+                raise ValueError(f"torque: {torque!r} is not allowed; need a finite number "
+                                 "[N m]")
+            self.override["torque"] = float(torque)
+
+    def clear_override(self, which=("pitch", "torque")) -> None:
+        """Give ``which`` ("pitch", "torque") back to the controller."""
+        for k in ([which] if isinstance(which, str) else which):
+            self.override[k] = None
+
     def step(self) -> None:
-        """One controller step: measure, ask, clip, ramp in, simulate."""
+        """One controller step: measure, ask (the controller is called even while
+        overridden: its filters and integrators follow), override, clip, ramp in,
+        simulate."""
         t0 = self.sim.t
-        if self.controller is not None:
-            demands = self.controller.step(self.measurements())
-            pitch, torque, clipped = self.limits.clip(demands.pitch, demands.torque,
-                                                      self._last[0], self._last[1], self.dt)
+        self.last_clipped = []
+        if self.controller is not None or any(v is not None for v in self.override.values()):
+            if self.controller is not None:
+                demands = self.controller.step(self.measurements())
+                pitch, torque = demands.pitch, demands.torque
+            else:
+                pitch, torque = self._last
+            if self.override["pitch"] is not None:
+                pitch = self.override["pitch"]
+            if self.override["torque"] is not None:
+                torque = self.override["torque"]
+            pitch, torque, clipped = self.limits.clip(pitch, torque, self._last[0],
+                                                      self._last[1], self.dt)
             for k in clipped:
                 self.clipped[k] += 1
+            self.last_clipped = clipped
             self.inputs.command(t0, t0 + self.dt, pitch=pitch, torque=torque)
             self._last = (pitch, torque)
         self.sim.advance(self.substeps)

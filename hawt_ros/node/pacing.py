@@ -29,7 +29,11 @@ class Pacing:
 
     def _step(self) -> bool:
         try:
+            if self.in_wind:
+                self._apply_overrides()
             self.sim.step()
+            if self.in_wind:
+                self._report_clipping()
         except Exception as exc:  # noqa: BLE001 - SimulationError or anything else
             kind = "simulation error" if isinstance(exc, self._SimulationError) else \
                 f"unexpected {type(exc).__name__}"

@@ -63,6 +63,24 @@ class StatePublisher:
         self._last_clock_t = stamp_ns
         self._emit(self.pub_clock, Clock(clock=time_msg(stamp_ns)), stamp_ns)
 
+    def _drive_joints(self, js, t, named, root_moments) -> None:
+        """In wind: ``blade_<k>_pitch`` (pitch [rad, towards feather], its rate, the root
+        moment about the pitch axis b1 [N m]) and ``generator`` (azimuth of the high-speed
+        shaft [rad], its speed [rad/s], the generator torque [N m])."""
+        loop = self.sim
+        beta, rate = loop.inputs.pitch(t)
+        for k in range(self.n_blades):
+            js.name.append(f"blade_{k}_pitch")
+            js.position.append(float(beta[k]))
+            js.velocity.append(float(rate[k]))
+            js.effort.append(float(root_moments[k, 0]))
+        N = loop.gearbox
+        angle = N * (loop.omega0 * t + float(named.get("generator_azimuth", 0.0)))
+        js.name.append("generator")
+        js.position.append(angle % (2 * math.pi))
+        js.velocity.append(float(loop.speeds()[1]))
+        js.effort.append(float(loop.inputs.generator_torque(t)))
+
     def _publish_state(self, stamp_ns: int) -> bool:
         """Publish every topic for the current simulation instant with one stamp."""
         if stamp_ns <= self._last_stamp_ns:
@@ -101,6 +119,8 @@ class StatePublisher:
         # the rotor's actual speed where the simulation has a free one (ClosedLoop.named)
         js.velocity = [yaw_rate, teeter_rate, float(named.get("rotor_speed", self.omega))]
         js.effort = [float(x) for x in loads]
+        if self.in_wind:
+            self._drive_joints(js, t, named, rm)
         self._emit(self.pub_joints, js, stamp_ns)
 
         for k in range(self.n_blades):

@@ -28,6 +28,7 @@ from .analysis_server import AnalysisServer
 from ..analysis_workers import AnalysisRunner, Job
 from .config import (NODE_NAME, STATE_QOS, STATUS_DOC, STATUS_PARAM, StartupError,
                      stream_is_tty, validate_status)
+from .overrides import Overrides
 from .pacing import Pacing
 from .publishers import StatePublisher
 from .recording import Recording
@@ -35,7 +36,7 @@ from .recording import Recording
 __all__ = ["HawtNode"]
 
 
-class HawtNode(Pacing, StatePublisher, Recording, AnalysisServer, Node):
+class HawtNode(Pacing, StatePublisher, Recording, AnalysisServer, Overrides, Node):
     """The hawt ROS 2 node (see :mod:`hawt_ros.node` and docs/ros.md)."""
 
     def __init__(self, **node_kwargs):
@@ -104,6 +105,9 @@ class HawtNode(Pacing, StatePublisher, Recording, AnalysisServer, Node):
         self.pub_joints = self.create_publisher(JointState, "joint_states", STATE_QOS)
         self.pub_blades = self.create_publisher(BladeDeflection, "blade_deflections", STATE_QOS)
         self.pub_markers = self.create_publisher(MarkerArray, "blade_markers", STATE_QOS)
+        self.in_wind = self.settings.wind > 0
+        if self.in_wind:
+            self._start_overrides(MutuallyExclusiveCallbackGroup())
         self.pub_clock = None
         if self.settings.real_time_factor == 0:
             self.pub_clock = self.create_publisher(Clock, "/clock", STATE_QOS)
