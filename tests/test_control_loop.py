@@ -263,3 +263,28 @@ def test_overrides_replace_the_controller_within_the_limits():
             loop.set_override(pitch=[0.1, 0.2])
     finally:
         loop.close()
+
+
+def test_a_new_wind_is_felt_and_followed():
+    """ClosedLoop.set_wind (the node's wind topic): 15 -> 18 m/s at t = 0.5 s, NREL 5-MW on a
+    rigid tower under ROSCO: the hub wind recorded is the new one from the next step, the
+    rotor speeds up (> 0.3 % above rated) and ROSCO pitches to feather (> 1 deg more within
+    4 s); a wind from behind the rotor is refused naming the field."""
+    t = replace(nrel5mw(), tower=None)
+    from hawt_core.analyses.closed_loop import closed_loop
+    loop = closed_loop(t, Wind(15.0), "rosco", discon=shipped_controller("nrel5mw"),
+                       elements=4)
+    try:
+        loop.run(0.5)
+        p0 = loop.last()["pitch1_deg"]
+        loop.set_wind(18.0)
+        loop.step()
+        assert loop.last()["wind_speed"] == pytest.approx(18.0)
+        loop.run(4.0)
+        H = loop.history()
+        assert H["rotor_speed_rpm"].max() > 1.003 * 12.1
+        assert loop.last()["pitch1_deg"] > p0 + 1.0
+        with pytest.raises(ValueError, match="wind direction: .* not allowed"):
+            loop.set_wind(10.0, direction=2.0)
+    finally:
+        loop.close()

@@ -950,7 +950,8 @@ def test_node_in_wind_operates_the_nrel5mw_under_rosco(spawn):
     rated speed (12.1 rpm within 5 %); joint_states carry each blade's pitch and the
     generator.  An external node's pitch_command (real DDS, loopback) takes the pitch: it
     moves to the command; a command below PC_MinPit (0) is clipped there and reported; after override_timeout of silence ROSCO has the pitch
-    again (logged, the pitch leaves the command).  Bounded: at most ~250 s."""
+    again (logged); a new wind on the wind topic is applied (logged).  Bounded: at most
+    ~280 s."""
     pytest.importorskip("rosco")
     from std_msgs.msg import Float64MultiArray
     node, cli = spawn({"turbine": "nrel5mw", "wind": 15.0, "elements": 4, "step_deg": 1.0,
@@ -977,9 +978,11 @@ def test_node_in_wind_operates_the_nrel5mw_under_rosco(spawn):
     def pitch_now():
         return js.msgs()[-1].position[3]
 
+    stop = threading.Event()
+
     def send(value, seconds):
         end = time.monotonic() + seconds
-        while time.monotonic() < end:
+        while time.monotonic() < end and not stop.is_set():
             pub.publish(Float64MultiArray(data=[value]))
             time.sleep(0.2)
 
@@ -991,8 +994,15 @@ def test_node_in_wind_operates_the_nrel5mw_under_rosco(spawn):
     sender = threading.Thread(target=send, args=(-1.0, 40.0), daemon=True)
     sender.start()
     wait_until(lambda: abs(pitch_now()) < 1e-9, 60.0, what="pitch at PC_MinPit")
+    stop.set()                       # (fine pitch at 15 m/s overspeeds the rotor: not long)
     sender.join()
     assert min(m.position[3] for m in js.msgs()) >= -1e-12
     assert "command clipped (pitch)" in node.log()
     wait_until(lambda: "the controller (rosco) has the pitch again" in node.log(), 30.0,
                what="release after the timeout")
+    # a new wind on the wind topic (frame tower: z downwind)
+    from geometry_msgs.msg import Vector3
+    wind = cli.node.create_publisher(Vector3, "/wind", 10)
+    wait_until(lambda: (wind.publish(Vector3(x=0.0, y=0.0, z=18.0)) or
+                        "wind: 18 m/s, direction +0 deg" in node.log()), 30.0,
+               what="the new wind applied")

@@ -211,6 +211,18 @@ def test_status_line_content_never_nan():
     assert "nan" not in line.lower() and "inf" not in line.lower(), line
     assert "t -- s" in line and "lag +0.0 mm" in line and "SIMULATION STOPPED" in line, line
 
+    # in wind: wind, rotor speed, power and pitch, the tip in metres; never nan
+    node._failed = None
+    node.last_state = (now, 12.5, 0.0, 0.0, 4.123, 0.51)
+    node.last_rotor = (15.0, 12.1, 5000.4, 9.21)
+    line = st.line()
+    for part in ("wind 15.0 m/s", "rotor 12.10 rpm", "power 5000 kW", "pitch 9.21 deg",
+                 "tip flap +4.12 m, lag +0.51 m"):
+        assert part in line, (part, line)
+    node.last_rotor = (float("nan"), 12.1, float("inf"), 9.0)
+    assert "nan" not in st.line().lower() and "inf" not in st.line().lower()
+    node.last_rotor = None
+
     # a stalled simulation: the achieved factor heads to 0
     st._samples.clear()
     st._samples.extend([(now - 12.0, 1.0), (now - 10.0, 3.0)])

@@ -327,6 +327,25 @@ class ClosedLoop:
                                  "[N m]")
             self.override["torque"] = float(torque)
 
+    def set_wind(self, speed: float, direction: float = 0.0) -> None:
+        """A new steady wind from the next step on: ``speed`` [m/s] at hub height (0.1 to
+        100) and ``direction`` [rad] about the yaw axis (|direction| < pi/2; aero.wind.Wind);
+        the shear and tower shadow stay, a history or gust ends.  A step in the wind the
+        rotor sees (its dynamic inflow lags it; Oye's time constants stay those of the
+        start)."""
+        if not (np.isfinite(speed) and 0.1 <= speed <= 100.0):
+            raise ValueError(f"wind speed: {speed!r} is not allowed; need 0.1 to 100 [m/s]")
+        if not (np.isfinite(direction) and abs(direction) < math.pi / 2):
+            raise ValueError(f"wind direction: {direction!r} is not allowed; need |direction| "
+                             "< pi/2 [rad] (the rotor faces the wind)")
+        w = replace(self.wind, speed=float(speed), direction=float(direction), history=(),
+                    gust=None)
+        aero = self.model.aero
+        aero.wind = w
+        aero.velocity = np.asarray(w.velocity(0.0, np.zeros(3)), float)   # uniform-wind path
+        self.model.wind = w
+        self.wind = w
+
     def clear_override(self, which=("pitch", "torque")) -> None:
         """Give ``which`` ("pitch", "torque") back to the controller."""
         for k in ([which] if isinstance(which, str) else which):

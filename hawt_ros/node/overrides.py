@@ -1,5 +1,11 @@
-"""Command overrides of the node in wind: an external controller's pitch and generator-torque
-commands replace the node's controller until they fall silent.
+"""Inputs of the node in wind: the wind itself, and an external controller's pitch and
+generator-torque commands, which replace the node's controller until they fall silent.
+
+``wind`` (geometry_msgs/Vector3): the wind velocity at hub height [m/s] in the frame
+``tower`` (x up along the yaw axis, y lateral, z downwind at zero direction): speed
+``hypot(y, z)``, direction ``atan2(-y, z)`` about the yaw axis (aero.wind.Wind's); it holds
+until the next message; a vertical component is warned about and ignored (the wind model is
+horizontal); out-of-range winds (speed 0.1..100 m/s, from upwind) are rejected (logged).
 
 Topics (subscribed only with ``wind`` > 0): ``pitch_command`` (std_msgs/Float64MultiArray: one
 angle for all blades or one per blade [rad, towards feather]) and ``torque_command``
@@ -15,6 +21,7 @@ from __future__ import annotations
 import math
 import threading
 
+from geometry_msgs.msg import Vector3
 from std_msgs.msg import Float64, Float64MultiArray
 
 from .config import STATE_QOS
@@ -39,6 +46,24 @@ class Overrides:
         self.sub_torque = self.create_subscription(
             Float64, "torque_command", self._on_torque_command, STATE_QOS,
             callback_group=callback_group)
+        self._wind_pending = None
+        self.sub_wind = self.create_subscription(Vector3, "wind", self._on_wind, STATE_QOS,
+                                                 callback_group=callback_group)
+
+    def _on_wind(self, msg) -> None:
+        x, y, z = float(msg.x), float(msg.y), float(msg.z)
+        speed, direction = math.hypot(y, z), math.atan2(-y, z) + 0.0   # no -0.0
+        if not all(math.isfinite(v) for v in (x, y, z)) or not 0.1 <= speed <= 100.0 \
+                or not abs(direction) < math.pi / 2:
+            self.get_logger().warning(
+                f"wind: ({x!r}, {y!r}, {z!r}) m/s rejected; need a finite horizontal wind of "
+                "0.1 to 100 m/s from upwind (z > 0) in frame tower (x up, z downwind)")
+            return
+        if x != 0.0:
+            self.get_logger().warning(f"wind: vertical component x = {x:g} m/s ignored (the "
+                                      "wind model is horizontal)")
+        with self._override_lock:
+            self._wind_pending = (speed, direction)
 
     def _on_pitch_command(self, msg) -> None:
         values = list(msg.data)
@@ -72,6 +97,13 @@ class Overrides:
         now = self.get_clock().now().nanoseconds
         timeout_ns = self.settings.override_timeout * 1e9
         released = []
+        with self._override_lock:
+            wind, self._wind_pending = self._wind_pending, None
+        if wind is not None:
+            self.sim.set_wind(*wind)
+            self.get_logger().info(f"wind: {wind[0]:.4g} m/s, direction "
+                                   f"{math.degrees(wind[1]):+.3g} deg (from t = "
+                                   f"{self.sim.t:.3f} s)")
         with self._override_lock:
             for which in ("pitch", "torque"):
                 last = self._override_last[which]

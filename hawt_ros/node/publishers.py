@@ -154,6 +154,10 @@ class StatePublisher:
         self._last_stamp_ns = stamp_ns
         self._last_pub_t = t
         self.published += 1
+        if self.in_wind:
+            r = self.sim.last()
+            self.last_rotor = (r["wind_speed"], r["rotor_speed_rpm"], r["generator_power_kw"],
+                               r["pitch1_deg"])
         self.last_state = (time.monotonic(), t, yaw, teeter, float(disp[0, -1, 2]),
                            float(disp[0, -1, 1]))
         return True

@@ -86,10 +86,20 @@ class StatusLine:
         else:
             _, t, yaw, teeter, flap, lag = st
             parts += [f"t {_num(t, '.2f')} s",
-                      f"rtf {_num(self.real_time_factor(), '.2f')}",
-                      f"teeter {_num(math.degrees(teeter), '+.2f')} deg",
-                      f"yaw {_num(math.degrees(wrap_pi(yaw)), '+.2f')} deg",
-                      f"tip flap {_num(flap * 1e3, '+.1f')} mm, lag {_num(lag * 1e3, '+.1f')} mm"]
+                      f"rtf {_num(self.real_time_factor(), '.2f')}"]
+            rotor = getattr(node, "last_rotor", None)
+            if rotor is not None:
+                # in wind: (wind [m/s], rotor [rpm], generator power [kW], pitch [deg])
+                wind, rpm, power, pitch = rotor
+                parts += [f"wind {_num(wind, '.1f')} m/s", f"rotor {_num(rpm, '.2f')} rpm",
+                          f"power {_num(power, '.0f')} kW", f"pitch {_num(pitch, '.2f')} deg",
+                          f"yaw {_num(math.degrees(wrap_pi(yaw)), '+.2f')} deg",
+                          f"tip flap {_num(flap, '+.2f')} m, lag {_num(lag, '+.2f')} m"]
+            else:
+                parts += [f"teeter {_num(math.degrees(teeter), '+.2f')} deg",
+                          f"yaw {_num(math.degrees(wrap_pi(yaw)), '+.2f')} deg",
+                          f"tip flap {_num(flap * 1e3, '+.1f')} mm, "
+                          f"lag {_num(lag * 1e3, '+.1f')} mm"]
         rec = node.recorder
         if rec is not None:
             parts.append(f"rec {Path(node.record_path).name} {rec.message_count} msgs")

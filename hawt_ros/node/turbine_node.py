@@ -51,6 +51,8 @@ class HawtNode(Pacing, StatePublisher, Recording, AnalysisServer, Overrides, Nod
         # last published instant for the status line: (monotonic, sim t, yaw, teeter,
         # blade-0 tip flap, blade-0 tip lead-lag) [s, s, rad, rad, m, m]; replaced whole
         self.last_state: Optional[tuple] = None
+        # in wind: (wind [m/s], rotor [rpm], generator power [kW], blade-0 pitch [deg])
+        self.last_rotor: Optional[tuple] = None
         self.status_enabled = False
 
         # ---------------------------------------------------------------- parameters
