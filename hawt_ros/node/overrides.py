@@ -92,8 +92,9 @@ class Overrides:
                                    f"after {self.settings.override_timeout:g} s of silence)")
 
     def _apply_overrides(self) -> None:
-        """Before a controller step (under the node's lock): hand the live overrides to the
-        closed loop, release the silent ones, report clipping."""
+        """Before a controller step (under the node's lock): apply a new wind, hand the live
+        overrides to the closed loop, release the silent ones (clipping is reported after
+        the step, _report_clipping)."""
         now = self.get_clock().now().nanoseconds
         timeout_ns = self.settings.override_timeout * 1e9
         released = []
