@@ -12,19 +12,13 @@ issue's goal for the live node: real-time factor >= 1 on one core. ``--plot`` wr
 ROSCO run on the flexible tower as a picture (results/plotting.py plot_time_history).
 """
 import argparse
-import math
 import time
 import warnings
 from dataclasses import replace
 
 from hawt_core.aero.wind import Wind
-from hawt_core.analyses.controller_design import builtin_gains
-from hawt_core.analyses.operating_points import operating_points
-from hawt_core.control.builtin import BuiltinController
-from hawt_core.control.discon import DisconController
-from hawt_core.control.loop import ActuatorLimits, ClosedLoop
+from hawt_core.analyses.closed_loop import closed_loop
 from hawt_core.io.catalog import load_any, shipped_controller
-from hawt_core.io.discon import discon_schedule, read_discon
 from hawt_core.results.plotting import plot_time_history
 
 
@@ -35,22 +29,16 @@ def main():
     args = ap.parse_args()
     warnings.simplefilter("ignore")
     path = shipped_controller("nrel5mw")
-    schedule, values = discon_schedule(path), read_discon(path)
     base = load_any("nrel5mw")
     wind = Wind(15.0, history=((0.0, 1.0), (1.0, 1.0), (1.5, 17 / 15), (1e3, 17 / 15)))
     print(f"{'tower':9s} {'controller':10s} {'set-up s':>8s} {'RTF':>6s} {'rpm':>7s} "
           f"{'MW':>6s} {'pitch':>6s}")
     for tower in ("flexible", "rigid"):
         t = base if tower == "flexible" else replace(base, tower=None)
-        point = operating_points(t, [15.0], schedule).points[0]
-        t = replace(t, rotor=replace(t.rotor, speed=point["rotor_speed_rpm"] * math.pi / 30,
-                                     pitch=-math.radians(point["pitch_deg"])))
         for kind in ("rosco", "builtin"):
-            ctrl = DisconController(path, 0.05, 3) if kind == "rosco" else \
-                BuiltinController(builtin_gains(t, schedule), 0.05, 3)
             w0 = time.perf_counter()
-            loop = ClosedLoop(t, wind, ctrl, dt=0.05, efficiency=schedule["efficiency"],
-                              limits=ActuatorLimits.from_discon(values), elements=4)
+            # from the schedule's operating point at 15 m/s (analyses/closed_loop.py)
+            loop = closed_loop(t, wind, kind, discon=path, elements=4)
             setup = time.perf_counter() - w0
             try:
                 s = loop.run(args.duration)

@@ -22,7 +22,7 @@ from hawt_core.aero.wind import Wind
 from hawt_core.cli import main
 from hawt_core.control.discon import (ControllerError, DisconController, Measurements,
                                       rosco_library)
-from hawt_core.control.loop import ActuatorLimits, ClosedLoop
+from hawt_core.control.loop import ActuatorLimits
 from hawt_core.io.catalog import rosco_test_cases, shipped_controller
 from hawt_core.io.discon import read_discon
 from test_turbine_aero import nrel5mw
@@ -75,17 +75,13 @@ def test_rosco_tracks_the_optimal_tip_speed_ratio_below_rated():
     """Reference: DISCON.IN's VS_TSRopt (7.5).  NREL 5-MW at 8 m/s, 4 elements, rigid tower,
     started at the schedule's optimal-TSR point: after 6 s under ROSCO the tip-speed ratio
     is within 3 % of VS_TSRopt and the pitch at PC_FinePit within 0.1 deg."""
+    from hawt_core.analyses.closed_loop import closed_loop
     d = discon()
-    t = nrel5mw()
-    t = replace(t, tower=None)
+    t = replace(nrel5mw(), tower=None)
     R = t.hub.radius + t.blade.length
     U = 8.0
-    omega = d["VS_TSRopt"] * U / R
-    t = replace(t, rotor=replace(t.rotor, speed=omega, pitch=-d["PC_FinePit"]))
-    path = shipped_controller("nrel5mw")
-    ctrl = DisconController(path, 0.05, 3)
-    loop = ClosedLoop(t, Wind(U), ctrl, dt=0.05, efficiency=d["VS_GenEff"] / 100,
-                      limits=ActuatorLimits.from_discon(d), elements=4)
+    # the schedule's operating point at 8 m/s: VS_TSRopt at fine pitch
+    loop = closed_loop(t, Wind(U), "rosco", discon=shipped_controller("nrel5mw"), elements=4)
     try:
         loop.run(6.0)
     finally:
@@ -175,22 +171,14 @@ def test_a_wind_step_settles_at_rated_speed(kind):
     rises (the step is felt: > 0.3 % above rated), then settles; over the last 2 s of 12 s
     the mean rotor speed is within 1 % of rated and the mean generator power within 2 % of
     rated, the pitch higher than at the start (more wind: more feather)."""
-    from hawt_core.analyses.controller_design import builtin_gains
-    from hawt_core.control.builtin import BuiltinController
+    from hawt_core.analyses.closed_loop import closed_loop
     from hawt_core.io.discon import discon_schedule
     path = shipped_controller("nrel5mw")
-    d, s = discon(), discon_schedule(path)
+    s = discon_schedule(path)
     t = replace(nrel5mw(), tower=None)
-    # the schedule's operating point at 15 m/s, as `hawt simulate --wind 15` starts from
-    from hawt_core.analyses.operating_points import operating_points
-    point = operating_points(t, [15.0], s).points[0]
-    t = replace(t, rotor=replace(t.rotor, speed=point["rotor_speed_rpm"] * math.pi / 30,
-                                 pitch=-math.radians(point["pitch_deg"])))
     wind = Wind(15.0, history=((0.0, 1.0), (1.0, 1.0), (1.5, 17.0 / 15.0), (100.0, 17.0 / 15.0)))
-    ctrl = BuiltinController(builtin_gains(t, s), 0.05, 3) if kind == "builtin" \
-        else DisconController(path, 0.05, 3)
-    loop = ClosedLoop(t, wind, ctrl, dt=0.05, efficiency=s["efficiency"],
-                      limits=ActuatorLimits.from_discon(d), elements=4)
+    # from the schedule's operating point at 15 m/s, as `hawt simulate --wind 15` starts
+    loop = closed_loop(t, wind, kind, discon=path, elements=4)
     try:
         loop.run(12.0)
     finally:
