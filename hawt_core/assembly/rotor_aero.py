@@ -167,6 +167,17 @@ class RotorAerodynamics:
                                             self.r / self.cos_cone)
             self.tau1, self.tau2 = float(tau1), tau2                 # [s], (N, G, 1)
 
+    def set_wind(self, wind: Wind) -> None:
+        """Blow ``wind`` from now on (a controller's live wind input): the free wind the
+        loads see; the frozen inductions and Oye's time constants stay those of the wind
+        the model was built in."""
+        if wind.shear_exponent != self.wind.shear_exponent or \
+                wind.tower_radius != self.wind.tower_radius:
+            raise ValueError("wind: a new wind must keep the shear exponent and tower shadow "
+                             "the aerodynamics were built with")
+        self.wind = wind
+        self.velocity = np.asarray(wind.velocity(0.0, np.zeros(3)), float)   # in N
+
     def initial_states(self, alpha=None) -> np.ndarray:
         """The aerodynamic unknowns (n,) of one blade in steady flow: the frozen inductions
         (and Oye's first stages at (1 - k) of them), the lag states at the quasi-steady angle

@@ -133,6 +133,13 @@ class TurbineModel:
         torque); see RigidSystem.set_controls for the frames and signs."""
         self.rigid.set_controls(controls)
 
+    def set_wind(self, wind: Wind) -> None:
+        """Blow ``wind`` from now on (RotorAerodynamics.set_wind); ValueError in a vacuum."""
+        if self.aero is None:
+            raise ValueError("wind: this model is in a vacuum (built without wind)")
+        self.aero.set_wind(wind)
+        self.wind = wind
+
     @property
     def controls(self):
         """The ControlInputs driving the actuators, or None."""
