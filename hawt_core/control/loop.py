@@ -172,9 +172,12 @@ class ClosedLoop:
         self._tips = [lay.blade(j).u[-1] for j in range(nb)]
         self._roots = [lay.blade(j).root_moment for j in range(nb)]
         self._tower = lay.tower() if lay.has_tower else None
-        #: (time, the tower top's inertial velocity, its acceleration) at the last
-        #: measurement (the fore-aft and side-side accelerations ROSCO reads)
+        #: (time, the tower top's inertial velocity) at the last measurement (for the
+        #: fore-aft and side-side accelerations ROSCO reads)
         self._top_velocity = None
+        #: the measurements of the last history row (the next controller call's, taken
+        #: once per instant)
+        self._measured = None
         self.clipped = {"pitch": 0, "torque": 0}
         #: what the last controller step clipped (field names)
         self.last_clipped = []
@@ -242,20 +245,17 @@ class ClosedLoop:
         top = np.stack([y[self._tower.theta[-1]], y[self._tower.V[-1]], y[self._tower.Omega[-1]]])
         fr = m.rigid.frames(y[:m.nq], t, top)
         v = fr["T"] @ top[1]                                   # inertial components
-        last = self._top_velocity
-        if last is not None and t == last[0]:
-            return last[2]                  # asked again at the same instant (the record)
-        acc = (0.0, 0.0)
-        if last is not None and t > last[0]:
-            a = (v - last[1]) / (t - last[0])
-            acc = (float(a @ fr["Y"][:, 2]), float(a @ fr["Y"][:, 1]))
-        self._top_velocity = (t, v, acc)
-        return acc
+        last, self._top_velocity = self._top_velocity, (t, v)
+        if last is None or not t > last[0]:
+            return (0.0, 0.0)
+        a = (v - last[1]) / (t - last[0])
+        return (float(a @ fr["Y"][:, 2]), float(a @ fr["Y"][:, 1]))
 
     def _record(self):
         """One history row at the current instant (what the actuators do, not what was
-        demanded: the demands are ramped in over the step)."""
-        m = self.measurements()
+        demanded: the demands are ramped in over the step); its measurements are kept for
+        the next controller call."""
+        m = self._measured = self.measurements()
         y = self.sim.y
         row = [m.time, m.hub_wind, m.rotor_speed * 30 / math.pi,
                m.generator_speed * 30 / math.pi, m.electrical_power / 1e3,
@@ -340,10 +340,7 @@ class ClosedLoop:
                              "< pi/2 [rad] (the rotor faces the wind)")
         w = replace(self.wind, speed=float(speed), direction=float(direction), history=(),
                     gust=None)
-        aero = self.model.aero
-        aero.wind = w
-        aero.velocity = np.asarray(w.velocity(0.0, np.zeros(3)), float)   # uniform-wind path
-        self.model.wind = w
+        self.model.set_wind(w)
         self.wind = w
 
     def clear_override(self, which=("pitch", "torque")) -> None:
@@ -359,7 +356,10 @@ class ClosedLoop:
         self.last_clipped = []
         if self.controller is not None or any(v is not None for v in self.override.values()):
             if self.controller is not None:
-                demands = self.controller.step(self.measurements())
+                # the record's measurements of this instant, with the wind now blowing
+                # (set_wind may have changed it since)
+                m = replace(self._measured, hub_wind=self.hub_wind(t0))
+                demands = self.controller.step(m)
                 pitch, torque = demands.pitch, demands.torque
             else:
                 pitch, torque = self._last
