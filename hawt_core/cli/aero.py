@@ -381,11 +381,8 @@ def schedule_from_args(args) -> dict:
     """The operating-point schedule: --controller FILE, the shipped turbine's DISCON.IN from
     the rosco wheel, or the values given; each given value overrides the file's."""
     import math
-    from ..io.catalog import shipped_controller
     from ..io.discon import discon_schedule
-    path = args.controller
-    if path is None or path in CONTROLLER_NAMES:
-        path = shipped_controller(args.turbine)
+    path = controller_file(args)
     s = discon_schedule(path) if path is not None else {}
     _schedule_defaults(s)
     given = {"rated_power": None if args.rated_power is None else 1e3 * args.rated_power,

@@ -80,12 +80,8 @@ def _closed_loop(args, turbine, wind, duration) -> int:
     if args.perturb:
         raise ValueError("--perturb: not used with a controller in the loop (the run starts "
                          "from the operating point)")
-    path = controller_file(args)
+    path = controller_file(args)           # (it refuses "rosco" without a DISCON.IN)
     kind = "builtin" if args.controller == "builtin" else "rosco"
-    if kind == "rosco" and path is None:
-        raise ValueError(f"--controller {args.controller}: no DISCON.IN for this turbine; "
-                         "give --controller DISCON.IN, or --controller builtin with "
-                         "--rated-power, --rated-rpm and --tsr-opt")
     schedule = schedule_from_args(args) if kind == "builtin" else None
     status = ProgressLine(not args.quiet or args.progress, force=args.progress)
     loop = None
