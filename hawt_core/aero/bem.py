@@ -262,11 +262,8 @@ class BemRotor:
         q = 0.5 * rho * w2 * self.chord
         normal, tangential = cn * q, ct * q
         residual = np.where(found, np.abs(f), np.inf)
-        # integrate with zero loads at the hub and tip radii (trapezoid rule)
-        rr = np.concatenate(([self.hub_radius], self.r, [self.tip_radius]))
-        pad = [(0, 0)] * (len(shape) - 1) + [(1, 1)]
-        thrust = self.B * np.trapezoid(np.pad(normal, pad) * cpc, rr, axis=-1)
-        torque = self.B * np.trapezoid(np.pad(tangential, pad) * rr * cpc, rr, axis=-1)
+        thrust = self._rotor_total(normal)
+        torque = self._rotor_total(tangential, moment=True)
         power = torque * Om
         R = self.swept_radius
         qa = 0.5 * rho * U * U * np.pi * R * R
@@ -287,10 +284,16 @@ class BemRotor:
         cl, cd, _ = self.polars.coefficients(phi - (self.twist + th))
         tangential = (cl * np.sin(phi) - cd * np.cos(phi)) * 0.5 * rho * (vx * vx + vy * vy) \
             * self.chord
+        return self._rotor_total(tangential, moment=True) * Om[..., 0]
+
+    def _rotor_total(self, load, moment: bool = False):
+        """The rotor's total of a load per unit length [N/m] (stations on the last axis):
+        B x its integral over the span (x cos precone), times the radius with ``moment``
+        (a torque), with zero load at the hub and tip radii (trapezoid rule)."""
         rr = np.concatenate(([self.hub_radius], self.r, [self.tip_radius]))
-        pad = [(0, 0)] * (tangential.ndim - 1) + [(1, 1)]
-        torque = self.B * np.trapezoid(np.pad(tangential, pad) * rr * cpc, rr, axis=-1)
-        return torque * Om[..., 0]
+        pad = [(0, 0)] * (np.ndim(load) - 1) + [(1, 1)]
+        f = np.pad(load, pad) * np.cos(self.precone)
+        return self.B * np.trapezoid(f * rr if moment else f, rr, axis=-1)
 
     def tip_speed_ratio(self, wind_speed, rotor_speed):
         """Omega R_tip / U (R_tip: the blade tip's distance along the blade from the axis, as
