@@ -2,7 +2,8 @@
 aerodynamics and inertia, as Jonkman et al. designed the NREL 5-MW baseline controller
 (NREL/TP-500-38060, 2009, section 7; Hansen et al., Risoe-R-1500, 2005):
 
-* region 2: ``k_opt = 1/2 rho pi R^5 Cp(tsr*) / tsr*^3 / N^3`` on the high-speed shaft, at
+* region 2: ``k_opt = 1/2 rho pi R_s^2 R^3 Cp(tsr*) / tsr*^3 / N^3`` on the high-speed shaft
+  (R the tip radius along the blade, R_s the swept one: the table's definitions), at
   the schedule's tip-speed ratio ``tsr*`` and fine pitch (Cp from the rigid-rotor BEM table,
   analyses/aero_table.py);
 * region 3: along the rated-speed, rated-power line the pitch sensitivity ``dP/dtheta`` is
@@ -93,10 +94,12 @@ def builtin_gains(turbine, schedule: dict, rho: float = 1.225, natural_frequency
         raise ValueError(f"turbine {turbine.name!r}: no drivetrain section (gearbox ratio, "
                          "generator inertia) to design a controller for")
     N = float(dt.gearbox_ratio)
-    R = turbine.hub.radius + turbine.blade.length * np.cos(turbine.rotor.precone)
     tsr = float(schedule["tsr"])
     cp = float(aero_table(turbine, [tsr], [np.degrees(schedule["fine_pitch"])]).cp[0, 0])
-    k_rotor = 0.5 * rho * np.pi * R ** 5 * cp / tsr ** 3
+    # P = 1/2 rho pi R_swept^2 U^3 Cp with U = Omega R_tip / tsr (the table's definitions)
+    rotor = BemRotor.from_turbine(turbine)
+    k_rotor = 0.5 * rho * np.pi * rotor.swept_radius ** 2 * rotor.tip_radius ** 3 * cp \
+        / tsr ** 3
     sens = pitch_sensitivity(turbine, schedule, rho)
     inertia = rotor_inertia(turbine) + N * N * float(dt.generator_inertia)
     omega = float(schedule["rated_speed"])
