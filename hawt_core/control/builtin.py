@@ -3,8 +3,8 @@ pitch-to-feather baseline of Jonkman et al. (NREL/TP-500-38060, 2009, section 7)
 
 * Generator speed low-pass filtered (first order, ``corner`` rad/s).
 * Torque: region 2, ``k_opt w^2`` (the optimal tip-speed ratio's torque law, on the filtered
-  generator speed); region 3 (pitch above ``region3_pitch`` or speed at rated), constant
-  power ``P_rated / (efficiency w)``.
+  generator speed); region 3 (pitch more than 1 deg above fine pitch, or speed at rated),
+  constant power ``P_rated / (efficiency w)``.
 * Pitch: a PI controller on the generator-speed error, gain-scheduled by
   ``GK = 1 / (1 + theta / theta_k)`` (the pitch sensitivity dP/dtheta grows linearly with
   pitch), its integral clamped so that the pitch stays between fine and largest pitch (no
@@ -69,19 +69,17 @@ class BuiltinController:
     def step(self, m: Measurements) -> Demands:
         g = self.gains
         w = float(m.generator_speed)
+        pitch_now = float(np.mean(m.pitch))
+        gk = 1.0 / (1.0 + max(pitch_now, 0.0) / g.theta_k)   # the gain schedule
         if self._speed is None:                      # the filter starts at the measurement
             self._speed = w
-            pitch0 = float(np.mean(m.pitch))
-            gk0 = 1.0 / (1.0 + max(pitch0, 0.0) / g.theta_k)
             # the integral that reproduces the starting pitch at zero speed error
-            self._integral = (pitch0 - g.fine_pitch) / (gk0 * g.ki) if g.ki else 0.0
+            self._integral = (pitch_now - g.fine_pitch) / (gk * g.ki) if g.ki else 0.0
         a = math.exp(-g.corner * self.dt)
         self._speed = a * self._speed + (1.0 - a) * w
         ws = self._speed
         # pitch: gain-scheduled PI on the speed error, integral clamped to the pitch range
         err = ws - g.rated_speed
-        pitch_now = float(np.mean(m.pitch))
-        gk = 1.0 / (1.0 + max(pitch_now, 0.0) / g.theta_k)
         self._integral += err * self.dt
         lo = 0.0
         hi = (g.max_pitch - g.fine_pitch) / (gk * g.ki) if g.ki else 0.0

@@ -92,7 +92,9 @@ class HawtNode(Pacing, StatePublisher, Recording, AnalysisServer, Overrides, Nod
             self.turbine_path = str(shipped_path(path))
         else:
             self.turbine_path = str(Path(path).resolve())
-        if self.settings.wind > 0:
+        #: the turbine operates in wind under a controller (the closed loop is ``sim``)
+        self.in_wind = self.settings.wind > 0
+        if self.in_wind:
             self._build_closed_loop(path)
         else:
             self._build_simulation()
@@ -107,7 +109,6 @@ class HawtNode(Pacing, StatePublisher, Recording, AnalysisServer, Overrides, Nod
         self.pub_joints = self.create_publisher(JointState, "joint_states", STATE_QOS)
         self.pub_blades = self.create_publisher(BladeDeflection, "blade_deflections", STATE_QOS)
         self.pub_markers = self.create_publisher(MarkerArray, "blade_markers", STATE_QOS)
-        self.in_wind = self.settings.wind > 0
         if self.in_wind:
             self._start_overrides(MutuallyExclusiveCallbackGroup())
         self.pub_clock = None
