@@ -60,14 +60,17 @@ _counter = itertools.count()
 TABLE2_N4 = [row[2] for row in TABLE2.values()]        # the paper's Table 2, N = 4
 
 
-def wait_until(cond, timeout: float, step: float = 0.02, what: str = "condition"):
+def wait_until(cond, timeout: float, step: float = 0.02, what: str = "condition", log=None):
+    """Poll cond until it is truthy; on time-out fail naming what, with the tail of log()
+    (a node's log) when given, so that a CI failure shows what the node was doing."""
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         v = cond()
         if v:
             return v
         time.sleep(step)
-    raise AssertionError(f"timed out after {timeout:g} s waiting for {what}")
+    tail = "" if log is None else "\nnode log (tail):\n" + "\n".join(log().splitlines()[-40:])
+    raise AssertionError(f"timed out after {timeout:g} s waiting for {what}{tail}")
 
 
 # ============================================================================ fixtures
@@ -949,9 +952,10 @@ def test_node_in_wind_operates_the_nrel5mw_under_rosco(spawn):
     state at 15 m/s, 3-5 m at this mesh, tests/test_control_loop.py); the rotor turns near
     rated speed (12.1 rpm within 5 %); joint_states carry each blade's pitch and the
     generator.  An external node's pitch_command (real DDS, loopback) takes the pitch: it
-    moves to the command; a command below PC_MinPit (0) is clipped there and reported; after override_timeout of silence ROSCO has the pitch
+    moves to the command; a command below PC_MinPit (0) is clipped there and reported; back
+    at the operating point's pitch, after override_timeout of silence ROSCO has the pitch
     again (logged); a new wind on the wind topic is applied (logged).  Bounded: at most
-    ~280 s."""
+    ~340 s."""
     pytest.importorskip("rosco")
     from std_msgs.msg import Float64MultiArray
     node, cli = spawn({"turbine": "nrel5mw", "wind": 15.0, "elements": 4, "step_deg": 1.0,
@@ -988,21 +992,30 @@ def test_node_in_wind_operates_the_nrel5mw_under_rosco(spawn):
 
     sender = threading.Thread(target=send, args=(target, 25.0), daemon=True)
     sender.start()
-    wait_until(lambda: abs(pitch_now() - target) < 2e-3, 60.0, what="pitch at the command")
+    wait_until(lambda: abs(pitch_now() - target) < 2e-3, 60.0, what="pitch at the command", log=node.log)
     sender.join()
     # below PC_MinPit (0 rad): the pitch runs down at the rate limit and stops at 0
     sender = threading.Thread(target=send, args=(-1.0, 40.0), daemon=True)
     sender.start()
-    wait_until(lambda: abs(pitch_now()) < 1e-9, 60.0, what="pitch at PC_MinPit")
-    stop.set()                       # (fine pitch at 15 m/s overspeeds the rotor: not long)
+    wait_until(lambda: abs(pitch_now()) < 1e-9, 60.0, what="pitch at PC_MinPit", log=node.log)
+    stop.set()
     sender.join()
     assert min(m.position[3] for m in js.msgs()) >= -1e-12
     assert "command clipped (pitch)" in node.log()
+    # fine pitch at 15 m/s overspeeds the rotor: back to the operating point's pitch before
+    # the silence that hands the pitch back to ROSCO
+    stop.clear()
+    sender = threading.Thread(target=send, args=(pitch0, 40.0), daemon=True)
+    sender.start()
+    wait_until(lambda: abs(pitch_now() - pitch0) < 2e-3, 60.0, what="pitch back",
+               log=node.log)
+    stop.set()
+    sender.join()
     wait_until(lambda: "the controller (rosco) has the pitch again" in node.log(), 30.0,
-               what="release after the timeout")
+               what="release after the timeout", log=node.log)
     # a new wind on the wind topic (frame tower: z downwind)
     from geometry_msgs.msg import Vector3
     wind = cli.node.create_publisher(Vector3, "/wind", 10)
     wait_until(lambda: (wind.publish(Vector3(x=0.0, y=0.0, z=18.0)) or
                         "wind: 18 m/s, direction +0 deg" in node.log()), 30.0,
-               what="the new wind applied")
+               what="the new wind applied", log=node.log)

@@ -239,11 +239,18 @@ class Simulator(StepSolver, SimulationOutputs):
         Fs = mass * (omega ** 2 * R + g) + 1.0
         sc = np.ones(self.n)
         sc[m.nq:m.nq + m.nu] = omega
-        for k in range(m.n_blades):
-            bl = m.layout.blade(k)
-            for name, s in (("u", R), ("theta", 1.0), ("V", omega * R), ("Omega", omega),
-                            ("F", Fs), ("M", Fs * L), ("root_force", Fs),
-                            ("root_moment", Fs * L)):
+        beams = [(m.layout.blade(k), R, Fs, L) for k in range(m.n_blades)]
+        if m.layout.has_tower:
+            # the tower carries the rotor and its own weight: forces of 1e6 N in a multi-MW
+            # turbine, whose round-off (1e-10 N) a unit scale would take for a Newton
+            # increment far above the tolerance (Newton then "diverges" at the floor)
+            H = float(m.tower.props.nodes[-1])
+            Ft = m.n_blades * Fs + float(np.sum(m.tower.h * m.tower.mass_per_length)) * g + 1.0
+            beams.append((m.layout.tower(), H, Ft, H))
+        for bl, length, force, arm in beams:
+            for name, s in (("u", length), ("theta", 1.0), ("V", omega * R),
+                            ("Omega", omega), ("F", force), ("M", force * arm),
+                            ("root_force", force), ("root_moment", force * arm)):
                 idx = getattr(bl, name).ravel()
                 idx = idx[idx >= 0]
                 sc[idx] = max(s, float(np.abs(y[idx]).max()) if len(idx) else s)
