@@ -1,6 +1,10 @@
 """Benchmark of the hawt ROS 2 node: publishing rate achieved vs requested, end-to-end latency
 (simulation instant's header stamp -> subscriber receive time), publishing gaps, and the
-modal_analysis service latency for N = 4 elements (cold, cached, invalid request).
+modal_analysis service latency for N = 4 elements (cold, cached, invalid request), on the
+paper's turbine in a vacuum; then the node's default, the NREL 5-MW in 15 m/s wind under
+ROSCO: the real-time factor it achieves as fast as possible (the issue's goal: >= 1 with
+margin on one core) and its publishing rate at real_time_factor 1 while 5 modal analyses
+(2..6 elements, all computed) are requested at once.
 
     .venv/bin/python bench/node.py                 # ~1.5 min on 2 cores
     .venv/bin/python bench/node.py --duration 3 --configs 10:0.25
@@ -117,8 +121,9 @@ def wait_for(cond, timeout):
 
 def bench_publishing(rate: float, rtf: float, duration: float, domain: int, tmp: Path,
                      step_deg: float, fake: bool) -> dict:
-    node = Node({"publish_rate": rate, "real_time_factor": rtf, "step_deg": step_deg,
-                 "perturb": "teeter=0.02"}, domain, tmp, fake="simulate" if fake else "",
+    node = Node({"turbine": "paper", "wind": 0.0, "publish_rate": rate,
+                 "real_time_factor": rtf, "step_deg": step_deg, "perturb": "teeter=0.02"},
+                domain, tmp, fake="simulate" if fake else "",
                 env={"HAWT_FAKE_STEP_COST": "0.001"} if fake else None)
     cli = Client(domain)
     try:
@@ -152,7 +157,8 @@ def bench_publishing(rate: float, rtf: float, duration: float, domain: int, tmp:
 def bench_service(domain: int, tmp: Path, repeats: int) -> list:
     from hawt_msgs.srv import ModalAnalysis
 
-    node = Node({"publish_rate": 10.0, "real_time_factor": 0.25}, domain, tmp)
+    node = Node({"turbine": "paper", "wind": 0.0, "publish_rate": 10.0,
+                 "real_time_factor": 0.25}, domain, tmp)
     cli = Client(domain)
     rows = []
     try:
@@ -182,6 +188,66 @@ def bench_service(domain: int, tmp: Path, repeats: int) -> list:
     return rows
 
 
+def bench_wind_fast(domain: int, tmp: Path, duration: float) -> dict:
+    """The default node (NREL 5-MW, 15 m/s, ROSCO) as fast as possible: achieved real-time
+    factor from the stamps (simulation time) over ``duration`` s of wall time."""
+    node = Node({"real_time_factor": 0.0, "publish_rate": 20.0}, domain, tmp)
+    cli = Client(domain)
+    try:
+        cli.subscribe_joint_states()
+        t0 = time.monotonic()
+        if not wait_for(lambda: len(cli.items) > 0, 120):
+            raise RuntimeError(f"no messages; node log:\n{node.log.read_text()}")
+        start_up = time.monotonic() - t0
+        n0 = len(cli.items)
+        time.sleep(duration)
+        with cli.lock:
+            items = cli.items[n0:]
+    finally:
+        node.stop()
+        cli.close()
+    mono = np.array([i[0] for i in items])
+    st = np.array([i[2] for i in items], float)
+    return {"start_up": start_up, "rtf": ((st[-1] - st[0]) / 1e9) / (mono[-1] - mono[0])}
+
+
+def bench_wind_analyses(domain: int, tmp: Path, count: int = 5) -> dict:
+    """The default node at real_time_factor 1, 20 Hz: publishing rate and largest gap before
+    and while ``count`` modal analyses (elements 2, 3, ...) are requested at once."""
+    from hawt_msgs.srv import ModalAnalysis
+
+    node = Node({"real_time_factor": 1.0, "publish_rate": 20.0}, domain, tmp)
+    cli = Client(domain)
+    try:
+        client = cli.node.create_client(ModalAnalysis, "/modal_analysis")
+        cli.subscribe_joint_states()
+        if not wait_for(lambda: len(cli.items) > 0, 120) or \
+                not client.wait_for_service(timeout_sec=60.0):
+            raise RuntimeError(f"no messages or service; node log:\n{node.log.read_text()}")
+        n0 = len(cli.items)
+        time.sleep(5.0)
+        with cli.lock:
+            quiet = [i[0] for i in cli.items[n0:]]
+        t0 = time.monotonic()
+        futures = [client.call_async(ModalAnalysis.Request(elements=2 + k))
+                   for k in range(count)]
+        wait_for(lambda: all(f.done() for f in futures), 900.0)
+        t1 = time.monotonic()
+        ok = sum(1 for f in futures if f.done() and f.result().success)
+        with cli.lock:
+            busy = [i[0] for i in cli.items if t0 <= i[0] <= t1]
+    finally:
+        node.stop()
+        cli.close()
+
+    def rate(ts):
+        return (len(ts) - 1) / (ts[-1] - ts[0]) if len(ts) > 1 else 0.0
+
+    return {"quiet_rate": rate(quiet), "quiet_gap": float(np.diff(quiet).max()) * 1e3,
+            "busy_rate": rate(busy), "busy_gap": float(np.diff(busy).max()) * 1e3
+            if len(busy) > 1 else float("nan"), "seconds": t1 - t0, "ok": ok, "count": count}
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--duration", type=float, default=5.0, help="seconds per configuration")
@@ -192,6 +258,7 @@ def main(argv=None) -> int:
                     help="stand-in simulator (1 ms per step): the node's own overhead")
     ap.add_argument("--repeats", type=int, default=5, help="cached/invalid service calls")
     ap.add_argument("--no-service", action="store_true")
+    ap.add_argument("--no-wind", action="store_true", help="skip the NREL 5-MW in wind")
     args = ap.parse_args(argv)
     tmp = Path(tempfile.mkdtemp(prefix="hawt-bench-node-"))
     os.environ.setdefault("ROS_LOG_DIR", str(tmp / "roslog"))
@@ -222,6 +289,17 @@ def main(argv=None) -> int:
                 print(name)
                 continue
             print(f"{name:<24}{t * 1e3:>8.1f}ms{ct:>9.2f}s{str(ok):>6}{n:>7}")
+    if not args.no_wind:
+        base += len(args.configs) + 1
+        print("\nthe default node: NREL 5-MW in 15 m/s under ROSCO (4 elements, 5 deg steps)")
+        r = bench_wind_fast(base, tmp, max(args.duration, 10.0))
+        print(f"  as fast as possible: real-time factor {r['rtf']:.2f} (start-up to the first "
+              f"message {r['start_up']:.1f} s)")
+        r = bench_wind_analyses(base + 1, tmp)
+        print(f"  real_time_factor 1, 20 Hz: {r['quiet_rate']:.1f} Hz (largest gap "
+              f"{r['quiet_gap']:.0f} ms); with {r['count']} modal analyses requested at once "
+              f"({r['ok']} answered with success in {r['seconds']:.0f} s): {r['busy_rate']:.1f} Hz "
+              f"(largest gap {r['busy_gap']:.0f} ms)")
     return 0
 
 

@@ -43,14 +43,24 @@ class ParameterError(ValueError):
 
 
 # ------------------------------------------------------------------------------ parameters
+#: what `bash scripts/run.sh` shows: the shipped NREL 5-MW operating in 15 m/s (above rated:
+#: ROSCO pitches) at 4 elements per blade, which the node simulates faster than real time
+#: on one core (bench/node.py)
+DEFAULT_TURBINE = "nrel5mw"
+DEFAULT_WIND = 15.0
+DEFAULT_ELEMENTS = 4
+
 #: name -> (default, description). Types are checked by validate_parameter (the node declares
 #: every parameter with dynamic typing so that ``-p step_deg:=1`` (an integer) is accepted
 #: where a float is expected).
 PARAMETERS: Dict[str, Tuple[Any, str]] = {
-    "turbine": ("", "turbine YAML file, OpenFAST deck (.fst), WindIO file or shipped name "
-                    "(hawt turbines); "
-                    "'' = the shipped default (the paper's Table 1)"),
-    "elements": (0, "beam elements per blade; 0 = the turbine file's value"),
+    "turbine": (DEFAULT_TURBINE, "turbine YAML file, OpenFAST deck (.fst), WindIO file or "
+                                 "shipped name (hawt turbines): default the NREL 5-MW under "
+                                 "ROSCO; 'paper' = the paper's Table 1 (in a vacuum); '' = "
+                                 "the default"),
+    "elements": (DEFAULT_ELEMENTS, "beam elements per blade (default 4: live for the NREL "
+                                   "5-MW, the paper's Table 2 mesh); 0 = the turbine file's "
+                                   "value"),
     "step_deg": (5.0, "simulation time step as rotor azimuth increment [deg], > 0 and "
                       f"<= {MAX_STEP_DEG:g}"),
     "publish_rate": (20.0, "publishing rate [Hz] (of simulation time when real_time_factor = 0)"),
@@ -61,9 +71,11 @@ PARAMETERS: Dict[str, Tuple[Any, str]] = {
     "perturb": ("", "initial perturbation, e.g. 'teeter=0.02,yaw_rate=0.01' "
                     f"(names: {', '.join(PERTURB_NAMES)})"),
     "marker_frame": ("nacelle", "frame of the blade markers: 'nacelle' or 'hub'"),
-    "wind": (0.0, "steady wind at hub height [m/s]; 0 = in a vacuum (the paper's model); > 0: "
-                  "the turbine operates in wind under `controller` (it needs an "
-                  "aerodynamics section and a drivetrain, e.g. turbine:=nrel5mw)"),
+    "wind": (DEFAULT_WIND, "steady wind at hub height [m/s]: the turbine operates in it "
+                           "under `controller` (it needs an aerodynamics section and a "
+                           "drivetrain, e.g. turbine:=nrel5mw); 0 = in a vacuum (the "
+                           "paper's model); left at its default, a turbine without "
+                           "aerodynamics (the paper's) runs in a vacuum"),
     "controller": ("rosco", "with wind > 0: 'rosco' (the rosco wheel's DISCON.IN for the "
                             "turbine), 'builtin' (hawt's baseline controller on that schedule) "
                             "or a DISCON.IN path"),
@@ -78,15 +90,15 @@ RUNTIME_CHANGEABLE = ("publish_rate", "real_time_factor", "record", "marker_fram
 
 @dataclass(frozen=True)
 class NodeSettings:
-    turbine: str = ""
-    elements: int = 0
+    turbine: str = DEFAULT_TURBINE
+    elements: int = DEFAULT_ELEMENTS
     step_deg: float = 5.0
     publish_rate: float = 20.0
     real_time_factor: float = 1.0
     record: str = ""
     perturb: Mapping[str, float] = field(default_factory=dict)
     marker_frame: str = "nacelle"
-    wind: float = 0.0
+    wind: float = DEFAULT_WIND
     controller: str = "rosco"
     override_timeout: float = 1.0
 

@@ -1,12 +1,14 @@
 #!/usr/bin/env bash
-# The main job: start the hawt ROS 2 node (hawt-node) on the default turbine (the paper's
-# Table 1), recording everything it publishes into runs/hawt-<date>-<time>.mcap, with a live
-# status line; the Floquet modal analysis (Table 2) is served on request. Ctrl-C stops the
-# node, which finalizes the recording; this script then prints `hawt info` of it.
+# The main job: start the hawt ROS 2 node (hawt-node) on the default turbine, the NREL 5-MW
+# operating in 15 m/s wind under ROSCO (its DISCON library from the rosco wheel), recording
+# everything it publishes into runs/hawt-<date>-<time>.mcap, with a live status line (wind,
+# rotor speed, power, pitch, tip deflection); the Floquet modal analysis is served on request.
+# Ctrl-C stops the node, which finalizes the recording; this script then prints `hawt info`.
+# The paper's turbine in a vacuum: bash scripts/run.sh --ros-args -p turbine:=paper
 # Sets up .venv first if needed (scripts/bootstrap.sh; fast when nothing changed).
 #
 #   bash scripts/run.sh                                  # defaults
-#   bash scripts/run.sh --ros-args -p elements:=8        # extra arguments go to hawt-node
+#   bash scripts/run.sh --ros-args -p wind:=8.0          # extra arguments go to hawt-node
 #   bash scripts/run.sh modes [--json ...]               # just the Table 2 table (`hawt modes`)
 #
 # Environment: HAWT_RUNS_DIR (recording folder, default <repo>/runs), ROS_DOMAIN_ID (kept),
@@ -55,10 +57,12 @@ hawt_cmd="$venv/bin/hawt"
 case "$hawt_cmd" in "$PWD"/*) hawt_cmd="${hawt_cmd#"$PWD"/}" ;; esac
 
 cat <<MSG
-hawt: starting the node on the default turbine; recording to $shown
-  publishes /joint_states (yaw, teeter, rotor_azimuth), /blade_deflections, /blade_markers
+hawt: starting the node (default: the NREL 5-MW in 15 m/s wind under ROSCO); recording to
+  $shown
+  publishes /joint_states (yaw, teeter, rotor azimuth, blade pitch, generator),
+  /blade_deflections, /blade_markers; subscribes /pitch_command, /torque_command, /wind
   ROS_DOMAIN_ID=${ROS_DOMAIN_ID:-0}  ROS_AUTOMATIC_DISCOVERY_RANGE=$ROS_AUTOMATIC_DISCOVERY_RANGE
-Modal analysis (Table 2) on request, from another terminal in this folder:
+Modal analysis on request, from another terminal in this folder:
   $hawt_cmd call modes                 # --json, --elements 8, --action (progress)
 With a full ROS 2 install (hawt_msgs built and sourced, same ROS_DOMAIN_ID):
   ros2 service call /modal_analysis hawt_msgs/srv/ModalAnalysis "{elements: 4}"

@@ -95,6 +95,9 @@ class NodeProcess:
             e["HAWT_ROS_FAKE"] = str(FAKES)
             e["HAWT_ROS_FAKE_PARTS"] = fake
         e.update(env or {})
+        # the paper's turbine in a vacuum unless the test says otherwise (the node's default
+        # is the NREL 5-MW in wind: tests/test_run_script.py runs it)
+        params = {"turbine": "paper", "wind": 0.0, **params}
         args = [str(NODE_EXE), "--ros-args"]
         for k, v in params.items():
             args += ["-p", f"{k}:={v}"]
@@ -824,7 +827,9 @@ def test_bad_parameters_exit_with_clear_errors(ros_env, tmp_path):
              ({"perturb": "spin=1"}, ["perturb", "spin", "teeter"]),
              ({"turbine": str(tmp_path / "missing.yaml")}, ["turbine", "missing.yaml"]),
              # a name that is neither a file nor a shipped turbine: the shipped ones listed
-             ({"turbine": "nrel7mw"}, ["turbine", "nrel7mw", "nrel5mw", "hawt turbines"])]
+             ({"turbine": "nrel7mw"}, ["turbine", "nrel7mw", "nrel5mw", "hawt turbines"]),
+             # a wind given for a turbine that has no aerodynamics (the paper's)
+             ({"wind": 15.0}, ["parameter wind", "15 m/s", "aerodynamics section", "wind:=0.0"])]
     procs = [(NodeProcess(tmp_path, p, domain_id()), words) for p, words in cases]
     for node, words in procs:
         try:

@@ -1,16 +1,24 @@
 """End-to-end test of the README's main job, ``bash scripts/run.sh``: the node starts on the
-default turbine with recording on, publishes joint states, serves the Floquet modal analysis
-(Table 2) on request, and Ctrl-C stops it leaving a finalized MCAP file, which the script
-summarizes with ``hawt info``.
+default turbine, the NREL 5-MW operating in 15 m/s wind under ROSCO, with recording on; it
+publishes joint states (pitch and generator included) at rated rotor speed, its status line
+shows wind, rotor speed, power, pitch and tip deflection, it serves the Floquet modal analysis
+on request, and Ctrl-C stops it leaving a finalized MCAP file, which the script summarizes with
+``hawt info``.
 
 The script runs in its own session (process group) with its own ROS_DOMAIN_ID,
 ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST, ROS_LOG_DIR and HAWT_RUNS_DIR in the test's temporary
 folder; Ctrl-C is a SIGINT to the whole process group, as a terminal sends it. The real
-simulation and modal analysis are used. Every wait is bounded (the whole test < 90 s).
-"""
+simulation and modal analysis are used. Every wait is bounded (the whole test < 120 s).
+
+References: the NREL 5-MW's rated rotor speed 12.1 rpm (Jonkman et al. 2009, NREL/TP-500-38060,
+Table 1-1; within 5 %, ROSCO's regulation in the first seconds) and its 1st tower side-side
+frequency 0.3120 Hz (FAST, Table 9-1; within 3 % at this coarse mesh of 4 elements per blade,
+rotating; tests/test_real_turbines.py checks it converged, at rest)."""
+
 from __future__ import annotations
 
 import json
+import math
 import os
 import signal
 import subprocess
@@ -19,7 +27,6 @@ import time
 from pathlib import Path
 
 import pytest
-from paper_tables import TABLE2
 from ros_support import child_env, domain_id, require_ros
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -39,10 +46,7 @@ except Exception as exc:  # noqa: BLE001
 
 pytestmark = pytest.mark.ros
 
-#: The paper's Table 2 (N = 4): 1st antisymmetric flap, per-rev, 7.3210 rounded to 7.32 as
-#: this test has always checked it (0.2 % about 7.32; about 7.3210 the window would move).
-TABLE2_ANTISYM_FLAP = round(TABLE2[("flap", "antisymmetric", 1)][2], 2)
-BUDGET = 88.0           # s, the whole test
+BUDGET = 118.0          # s, the whole test
 
 
 def _require_ros():
@@ -64,7 +68,8 @@ def test_run_script_node_modes_ctrl_c(tmp_path):
         env.pop(k, None)
     log_path = tmp_path / "run.log"
     log = open(log_path, "w")
-    proc = subprocess.Popen(["bash", str(RUN_SH)], env=env, cwd=str(tmp_path),
+    proc = subprocess.Popen(["bash", str(RUN_SH), "--ros-args", "-p", "status:=true"],
+                            env=env, cwd=str(tmp_path),
                             stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
                             start_new_session=True)
 
@@ -84,16 +89,28 @@ def test_run_script_node_modes_ctrl_c(tmp_path):
         node.create_subscription(JointState, "joint_states", got.append, 10)
         executor = SingleThreadedExecutor(context=ctx)
         executor.add_node(node)
-        deadline = time.monotonic() + min(40.0, left())
+        deadline = time.monotonic() + min(60.0, left())
         while len(got) < 3 and time.monotonic() < deadline:
             assert proc.poll() is None, f"run.sh exited early ({proc.returncode}):\n{output()}"
             executor.spin_once(timeout_sec=0.1)
-        assert len(got) >= 3, f"no joint_states within 40 s:\n{output()}"
-        assert list(got[-1].name) == ["yaw", "teeter", "rotor_azimuth"]
+        assert len(got) >= 3, f"no joint_states within 60 s:\n{output()}"
+        assert list(got[-1].name) == ["yaw", "teeter", "rotor_azimuth", "blade_0_pitch",
+                                      "blade_1_pitch", "blade_2_pitch", "generator"]
+        rpm = got[-1].velocity[2] * 30 / math.pi
+        assert abs(rpm - 12.1) < 0.05 * 12.1, (rpm, output())
         executor.shutdown(timeout_sec=1.0)
 
         out = output()
         assert "hawt call modes" in out and "ros2 service call /modal_analysis" in out, out
+        assert "closed loop in 15 m/s wind under rosco" in out, out
+        # the plain status line (every 5 s without a terminal)
+        wait_until_text = time.monotonic() + min(15.0, left())
+        while "hawt | " not in output() and time.monotonic() < wait_until_text:
+            time.sleep(0.1)
+        status = [ln for ln in output().splitlines() if ln.startswith("hawt | ")]
+        assert status, output()
+        for part in ("wind 15.0 m/s", "rotor ", "rpm", "power ", "kW", "pitch ", "tip flap"):
+            assert part in status[-1], (part, status[-1])
         files = sorted(runs.glob("hawt-*.mcap"))
         assert len(files) == 1, (files, out)
         mcap = files[0]
@@ -108,11 +125,11 @@ def test_run_script_node_modes_ctrl_c(tmp_path):
         assert call.returncode == 0, f"{call.stderr}\n--- run.sh:\n{output()}"
         data = json.loads(call.stdout)
         assert data["settings"]["elements"] == 4
-        flap = [m for m in data["modes"] if m["family"] == "flap"
-                and m["symmetry"] == "antisymmetric" and m["index"] == 1]
-        assert flap, data["modes"]
-        f = flap[0]["frequency_per_rev"]
-        assert abs(f - TABLE2_ANTISYM_FLAP) / TABLE2_ANTISYM_FLAP < 0.002, f
+        side = [m for m in data["modes"] if m["family"] == "tower"
+                and m["symmetry"] == "side-side" and m["index"] == 1]
+        assert side, data["modes"]
+        f = side[0]["frequency_hz"]
+        assert abs(f - 0.3120) / 0.3120 < 0.03, f
         assert proc.poll() is None, f"run.sh exited during the analysis:\n{output()}"
 
         # ------------------------------------------------ Ctrl-C: finalized recording

@@ -17,6 +17,13 @@ class Pacing:
         publish_rate of them (real_time_factor / step time)."""
         s = self.settings
         if s.real_time_factor > 0 and s.publish_rate > s.real_time_factor / self.dt * (1 + 1e-9):
+            if "publish_rate" not in (getattr(self, "_parameter_overrides", {}) or {}):
+                # the default rate: not the user's request, only a fact
+                self.get_logger().info(
+                    f"publishing at {s.real_time_factor / self.dt:.3g} Hz, the rate of new "
+                    f"simulation instants (real_time_factor / step; publish_rate "
+                    f"{s.publish_rate:g} Hz at its default)")
+                return
             self.get_logger().warning(
                 f"publish_rate {s.publish_rate:g} Hz exceeds the rate of new simulation instants "
                 f"real_time_factor / step = {s.real_time_factor / self.dt:.3g} Hz: publishing "

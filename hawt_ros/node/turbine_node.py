@@ -22,8 +22,8 @@ from hawt_msgs.srv import ModalAnalysis as ModalAnalysisSrv
 
 from ..backend import load_backend
 from ..geometry import RotorGeometry
-from ..params import (PARAMETERS, RUNTIME_CHANGEABLE, ParameterError, settings_from_parameters,
-                      validate_parameter)
+from ..params import (DEFAULT_TURBINE, PARAMETERS, RUNTIME_CHANGEABLE, ParameterError,
+                      settings_from_parameters, validate_parameter)
 from .analysis_server import AnalysisServer
 from ..analysis_workers import AnalysisRunner, Job
 from .config import (NODE_NAME, STATE_QOS, STATUS_DOC, STATUS_PARAM, StartupError,
@@ -78,22 +78,31 @@ class HawtNode(Pacing, StatePublisher, Recording, AnalysisServer, Overrides, Nod
         from hawt_core.io import TurbineFileError
         from hawt_core.io.catalog import SHIPPED, load_any, shipped_path
 
-        path = self.settings.turbine or None
+        path = self.settings.turbine or DEFAULT_TURBINE
         try:
             self.turbine = load_any(path)
         except TurbineFileError as exc:
             raise StartupError(f"parameter turbine: {path!r}: {exc}") from None
         except OSError as exc:
             raise StartupError(f"parameter turbine: {path!r} cannot be read: {exc}") from None
-        if path is None:
-            from hawt_core.io import default_turbine_path
-            self.turbine_path = str(default_turbine_path())
-        elif path in SHIPPED and not Path(path).exists():
+        if path in SHIPPED and not Path(path).exists():
             self.turbine_path = str(shipped_path(path))
         else:
             self.turbine_path = str(Path(path).resolve())
         #: the turbine operates in wind under a controller (the closed loop is ``sim``)
         self.in_wind = self.settings.wind > 0
+        if self.in_wind and self.turbine.aerodynamics is None:
+            if "wind" in (getattr(self, "_parameter_overrides", {}) or {}):
+                raise StartupError(
+                    f"parameter wind: {self.settings.wind:g} m/s needs a turbine with an "
+                    f"aerodynamics section; turbine '{self.turbine.name}' ({self.turbine_path})"
+                    " has none (wind:=0.0 simulates it in a vacuum)")
+            # the default wind, on a turbine that cannot feel it: the paper's model
+            self.get_logger().info(
+                f"turbine '{self.turbine.name}' has no aerodynamics section: in a vacuum "
+                f"(the default wind {self.settings.wind:g} m/s does not apply)")
+            self.settings = self.settings.replace(wind=0.0)
+            self.in_wind = False
         if self.in_wind:
             self._build_closed_loop(path)
         else:
