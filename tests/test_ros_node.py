@@ -950,7 +950,7 @@ def test_simulation_error_keeps_node_and_services_alive(spawn, failure, logged):
     assert node.wait(20) == 0, node.log()
 
 
-def test_node_in_wind_operates_the_nrel5mw_under_rosco(spawn):
+def test_node_in_wind_operates_the_nrel5mw_under_rosco(spawn, tmp_path):
     """wind:=15 on the NREL 5-MW (4 elements): the node starts at the schedule's operating
     point under ROSCO and publishes the blades deflected by the wind: blade 0's tip flap
     (out of plane, b3) above 1 m where the vacuum's is ~0 (reference: the aeroelastic steady
@@ -959,19 +959,41 @@ def test_node_in_wind_operates_the_nrel5mw_under_rosco(spawn):
     generator.  An external node's pitch_command (real DDS, loopback) takes the pitch: it
     moves to the command; a command below PC_MinPit (0) is clipped there and reported; back
     at the operating point's pitch, after override_timeout of silence ROSCO has the pitch
-    again (logged); a new wind on the wind topic is applied (logged).  Bounded: at most
-    ~340 s."""
+    again (logged); a new wind on the wind topic is applied (logged).
+    rotor_state (hawt_msgs/RotorState) at the joint states' stamps: the same rotor speed and
+    pitch; the gearbox ratio 97 between the speeds; electrical = mechanical power x VS_GenEff
+    (94.4 %, the DISCON.IN) to 1e-9; electrical power at VS_RtPwr (5 MW) within 5 %; the
+    tower top pushed downwind by the thrust (z > 0, below 2 m); pitch_override true while the
+    command holds, false after the release.  The recording (MCAP) holds rotor_state, read by
+    rosbags after SIGINT.  Bounded: at most ~360 s."""
     pytest.importorskip("rosco")
+    from rosbags.highlevel import AnyReader
     from std_msgs.msg import Float64MultiArray
+    from hawt_msgs.msg import RotorState
+    bag = tmp_path / "wind.mcap"
     node, cli = spawn({"turbine": "nrel5mw", "wind": 15.0, "elements": 4, "step_deg": 1.0,
                        "real_time_factor": 0.0, "publish_rate": 5.0,
-                       "override_timeout": 3.0})
+                       "override_timeout": 3.0, "record": str(bag)})
     bd = cli.subscribe(BladeDeflection, "/blade_deflections")
     js = cli.subscribe(JointState, "/joint_states")
+    rs = cli.subscribe(RotorState, "/rotor_state")
     first_message(node, bd, timeout=120.0)
-    wait_until(lambda: len(js) >= 3, 60.0, what="joint states")
+    wait_until(lambda: len(js) >= 3 and len(rs) >= 3, 60.0, what="joint states, rotor state")
     tip = [m for m in bd.msgs() if m.blade == 0][-1].displacement[-1]
     assert tip.z > 1.0, node.log()
+    by_stamp = {stamp_ns(m.header.stamp): m for m in js.msgs()}
+    pairs = [(by_stamp[stamp_ns(r.header.stamp)], r) for r in rs.msgs()
+             if stamp_ns(r.header.stamp) in by_stamp]
+    assert pairs
+    for j, r in pairs:
+        assert r.rotor_speed == pytest.approx(j.velocity[2], rel=1e-12)
+        assert list(r.pitch) == pytest.approx(list(j.position[3:6]), abs=1e-12)
+        assert r.generator_speed / r.rotor_speed == pytest.approx(97.0, rel=5e-3)
+        assert r.electrical_power == pytest.approx(0.944 * r.mechanical_power, rel=1e-9)
+        assert abs(r.electrical_power - 5e6) < 0.05 * 5e6
+        assert 0.0 < r.tower_top_displacement.z < 2.0
+        assert r.wind_speed == pytest.approx(15.0) and r.header.frame_id == "tower"
+        assert not r.pitch_override and r.controller == "rosco"
     last = js.msgs()[-1]
     assert list(last.name) == ["yaw", "teeter", "rotor_azimuth", "blade_0_pitch",
                                "blade_1_pitch", "blade_2_pitch", "generator"]
@@ -997,7 +1019,9 @@ def test_node_in_wind_operates_the_nrel5mw_under_rosco(spawn):
 
     sender = threading.Thread(target=send, args=(target, 25.0), daemon=True)
     sender.start()
-    wait_until(lambda: abs(pitch_now() - target) < 2e-3, 60.0, what="pitch at the command", log=node.log)
+    wait_until(lambda: abs(pitch_now() - target) < 2e-3, 60.0, what="pitch at the command",
+               log=node.log)
+    assert rs.msgs()[-1].pitch_override
     sender.join()
     # below PC_MinPit (0 rad): the pitch runs down at the rate limit and stops at 0
     sender = threading.Thread(target=send, args=(-1.0, 40.0), daemon=True)
@@ -1018,9 +1042,23 @@ def test_node_in_wind_operates_the_nrel5mw_under_rosco(spawn):
     sender.join()
     wait_until(lambda: "the controller (rosco) has the pitch again" in node.log(), 30.0,
                what="release after the timeout", log=node.log)
+    n_rs = len(rs)
+    wait_until(lambda: len(rs) > n_rs + 1, 30.0, what="rotor state after the release")
+    assert not rs.msgs()[-1].pitch_override
     # a new wind on the wind topic (frame tower: z downwind)
     from geometry_msgs.msg import Vector3
     wind = cli.node.create_publisher(Vector3, "/wind", 10)
     wait_until(lambda: (wind.publish(Vector3(x=0.0, y=0.0, z=18.0)) or
                         "wind: 18 m/s, direction +0 deg" in node.log()), 30.0,
                what="the new wind applied", log=node.log)
+    n_rs = len(rs)
+    wait_until(lambda: len(rs) > n_rs + 1, 30.0, what="rotor state in the new wind")
+    assert rs.msgs()[-1].wind_speed == pytest.approx(18.0)
+    node.signal(signal.SIGINT)
+    assert node.wait(30) == 0, node.log()
+    with AnyReader([bag]) as reader:
+        conns = [c for c in reader.connections if c.topic == "/rotor_state"]
+        assert conns and conns[0].msgtype == "hawt_msgs/msg/RotorState"
+        got = [reader.deserialize(raw, c.msgtype) for c, _t, raw in reader.messages(conns)]
+    assert len(got) >= 3 and all(len(m.pitch) == 3 for m in got)
+    assert max(m.wind_speed for m in got) == pytest.approx(18.0)

@@ -296,6 +296,34 @@ class ClosedLoop:
         """The simulator's blade deflections and root loads (Simulator.blade_deflections)."""
         return self.sim.blade_deflections()
 
+    def rotor_state(self) -> dict:
+        """The signals of the current instant a controller reads, as SI values (what the ROS
+        node publishes on ``rotor_state``): ``time`` [s], ``wind_speed`` [m/s] and
+        ``wind_direction`` [rad] at the hub, ``rotor_speed`` and ``generator_speed``
+        [rad/s], ``generator_torque`` [N m, HSS], ``mechanical_power`` and
+        ``electrical_power`` [W], ``pitch`` [rad, towards feather] and
+        ``root_out_of_plane_moment`` [N m] per blade, ``pitch_override`` and
+        ``torque_override`` (an external command holds), ``tower_top_displacement`` (3,) [m]
+        in the tower root frame t (t1 up, t2 lateral, t3 downwind; zeros on a rigid tower)
+        and ``tower_top_acceleration`` (fore-aft, side-side) [m/s^2] over the last controller
+        step.  From the last record (the controller's measurements): no state changes."""
+        m = self._measured
+        if m is None:
+            raise ValueError("rotor_state: nothing recorded yet")
+        top = np.zeros(3) if self._tower is None else \
+            np.array(self.sim.y[self._tower.u[-1]], float)
+        return {"time": m.time, "wind_speed": m.hub_wind,
+                "wind_direction": float(self.wind.direction),
+                "rotor_speed": m.rotor_speed, "generator_speed": m.generator_speed,
+                "generator_torque": m.generator_torque, "mechanical_power": m.shaft_power,
+                "electrical_power": m.electrical_power,
+                "pitch": np.asarray(m.pitch, float).copy(),
+                "root_out_of_plane_moment": np.asarray(m.root_out_of_plane, float).copy(),
+                "pitch_override": self.override["pitch"] is not None,
+                "torque_override": self.override["torque"] is not None,
+                "tower_top_displacement": top,
+                "tower_top_acceleration": tuple(m.tower_top_acceleration)}
+
     def last(self) -> dict:
         """The last history row by column name."""
         return dict(zip(self.columns(), self.rows[-1]))

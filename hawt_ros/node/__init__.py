@@ -1,12 +1,15 @@
 """The hawt ROS 2 node (console script ``hawt-node``).
 
-Steps the nonlinear turbine simulation (hawt_core Simulator) and publishes
+Steps the nonlinear turbine simulation (hawt_core Simulator; in wind the closed loop under a
+controller, hawt_core.control.ClosedLoop) and publishes
 
 * ``joint_states``       sensor_msgs/JointState: joints ``yaw``, ``teeter``, ``rotor_azimuth``
                          (position, velocity, effort = moments from the blade root loads);
 * ``blade_deflections``  hawt_msgs/BladeDeflection, one message per blade per publish;
 * ``blade_markers``      visualization_msgs/MarkerArray: each deformed blade as a LINE_STRIP
                          in frame ``nacelle`` (or ``hub``, parameter ``marker_frame``);
+* ``rotor_state``        hawt_msgs/RotorState, in wind only: wind, speeds, power, pitch per
+                         blade, overrides, tower-top motion;
 * ``/clock``             rosgraph_msgs/Clock, only when ``real_time_factor`` is 0;
 
 and serves the Floquet modal analysis of its turbine as service ``modal_analysis``

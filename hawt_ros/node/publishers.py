@@ -1,5 +1,6 @@
-"""Publishing one simulation instant: joint states, blade deflections, blade markers and
-/clock, each serialized once when recording (the same bytes are published and recorded)."""
+"""Publishing one simulation instant: joint states, blade deflections, blade markers, in wind
+the rotor state, and /clock, each serialized once when recording (the same bytes are
+published and recorded)."""
 from __future__ import annotations
 
 import math
@@ -13,7 +14,7 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import ColorRGBA, Header
 from visualization_msgs.msg import Marker, MarkerArray
 
-from hawt_msgs.msg import BladeDeflection
+from hawt_msgs.msg import BladeDeflection, RotorState
 
 from ..bag import serialize, type_name_of
 from .config import BLADE_COLORS, JOINT_NAMES, wrap_pi
@@ -39,6 +40,8 @@ class StatePublisher:
 
     def _publishers_list(self):
         pubs = [self.pub_joints, self.pub_blades, self.pub_markers]
+        if self.pub_rotor is not None:
+            pubs.append(self.pub_rotor)
         if self.pub_clock is not None:
             pubs.append(self.pub_clock)
         return pubs
@@ -81,6 +84,32 @@ class StatePublisher:
         js.velocity.append(float(loop.speeds()[1]))
         js.effort.append(float(loop.inputs.generator_torque(t)))
 
+    def _rotor_state_msg(self, header) -> RotorState:
+        """In wind: the closed loop's rotor state (ClosedLoop.rotor_state) as a message."""
+        r = self.sim.rotor_state()
+        top = r["tower_top_displacement"]
+        fa, ss = r["tower_top_acceleration"]
+        msg = RotorState(
+            header=header, wind_speed=float(r["wind_speed"]),
+            wind_direction=float(r["wind_direction"]), rotor_speed=float(r["rotor_speed"]),
+            generator_speed=float(r["generator_speed"]),
+            generator_torque=float(r["generator_torque"]),
+            mechanical_power=float(r["mechanical_power"]),
+            electrical_power=float(r["electrical_power"]),
+            pitch=[float(x) for x in r["pitch"]],
+            root_out_of_plane_moment=[float(x) for x in r["root_out_of_plane_moment"]],
+            pitch_override=bool(r["pitch_override"]),
+            torque_override=bool(r["torque_override"]), controller=self.settings.controller,
+            tower_top_displacement=Vector3(x=float(top[0]), y=float(top[1]), z=float(top[2])),
+            tower_top_acceleration_fore_aft=float(fa),
+            tower_top_acceleration_side_side=float(ss))
+        values = [msg.wind_speed, msg.wind_direction, msg.rotor_speed, msg.generator_speed,
+                  msg.generator_torque, msg.mechanical_power, msg.electrical_power, *msg.pitch,
+                  *msg.root_out_of_plane_moment, *top, fa, ss]
+        if not _finite(values):
+            raise ValueError("non-finite rotor state")
+        return msg
+
     def _publish_state(self, stamp_ns: int) -> bool:
         """Publish every topic for the current simulation instant with one stamp."""
         if stamp_ns <= self._last_stamp_ns:
@@ -111,6 +140,14 @@ class StatePublisher:
             self._fail(f"non-finite simulation state at t = {t:.6f} s (nothing published)")
             return False
         stamp = time_msg(stamp_ns)
+        rotor = None
+        if self.in_wind:
+            try:
+                rotor = self._rotor_state_msg(Header(stamp=stamp, frame_id="tower"))
+            except Exception as exc:  # noqa: BLE001 - never publish NaN: stop instead
+                self._fail(f"reading the rotor state at t = {t:.6f} s failed: "
+                           f"{type(exc).__name__}: {exc} (nothing published)")
+                return False
 
         js = JointState()
         js.header = Header(stamp=stamp, frame_id="")
@@ -150,6 +187,8 @@ class StatePublisher:
             mk.points = [Point(x=a, y=bb, z=c) for a, bb, c in points[k].tolist()]
             ma.markers.append(mk)
         self._emit(self.pub_markers, ma, stamp_ns)
+        if rotor is not None:
+            self._emit(self.pub_rotor, rotor, stamp_ns)
 
         self._last_stamp_ns = stamp_ns
         self._last_pub_t = t

@@ -27,7 +27,8 @@ class Recording:
                     "elements": self.model.beam.N, "step_deg": s.step_deg,
                     "publish_rate": s.publish_rate, "real_time_factor": s.real_time_factor,
                     "perturb": dict(s.perturb), "marker_frame": s.marker_frame,
-                    "simulation": self.sim_source}
+                    "simulation": self.sim_source, "wind": s.wind,
+                    "controller": s.controller if s.wind > 0 else None}
         self._name_crashed_recordings(p.parent)
         self.recorder = BagWriter(p, turbine_yaml=turbine_yaml, settings=settings)
         for pub in self._publishers_list():

@@ -17,7 +17,7 @@ from sensor_msgs.msg import JointState
 from visualization_msgs.msg import MarkerArray
 
 from hawt_msgs.action import ModalAnalysis as ModalAnalysisAction
-from hawt_msgs.msg import BladeDeflection
+from hawt_msgs.msg import BladeDeflection, RotorState
 from hawt_msgs.srv import ModalAnalysis as ModalAnalysisSrv
 
 from ..backend import load_backend
@@ -118,7 +118,9 @@ class HawtNode(Pacing, StatePublisher, Recording, AnalysisServer, Overrides, Nod
         self.pub_joints = self.create_publisher(JointState, "joint_states", STATE_QOS)
         self.pub_blades = self.create_publisher(BladeDeflection, "blade_deflections", STATE_QOS)
         self.pub_markers = self.create_publisher(MarkerArray, "blade_markers", STATE_QOS)
+        self.pub_rotor = None
         if self.in_wind:
+            self.pub_rotor = self.create_publisher(RotorState, "rotor_state", STATE_QOS)
             self._start_overrides(MutuallyExclusiveCallbackGroup())
         self.pub_clock = None
         if self.settings.real_time_factor == 0:
