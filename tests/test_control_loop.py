@@ -238,11 +238,18 @@ def test_overrides_replace_the_controller_within_the_limits():
             loop.step()
             assert loop.last()["generator_torque_knm"] * 1e3 <= d["VS_MaxTq"] + 1e-6
         assert loop.clipped["torque"] >= 10 and "torque" in loop.last_clipped
+        r = loop.rotor_state()                 # what the node's rotor_state carries
+        assert r["pitch_override"] and r["torque_override"]
+        assert r["generator_torque"] <= d["VS_MaxTq"] + 1e-6
+        assert r["electrical_power"] == pytest.approx(d["VS_GenEff"] / 100
+                                                      * r["mechanical_power"], rel=1e-12)
+        assert np.all(r["tower_top_displacement"] == 0.0)          # a rigid tower
         H = loop.history()
         rate = np.diff(np.radians(H["pitch1_deg"][-10:])) / loop.dt
         assert np.all(rate <= d["PC_MaxRat"] * (1 + 1e-9))
         loop.clear_override()
         assert loop.override == {"pitch": None, "torque": None}
+        assert not loop.rotor_state()["pitch_override"]
         for _ in range(20):
             loop.step()
         assert abs(loop.last()["generator_torque_knm"] * 1e3 - d["VS_RtTq"]) \
