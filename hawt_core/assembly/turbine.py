@@ -153,12 +153,12 @@ class TurbineModel:
         return d + (self.tower.dynamic_dimension() if self.tower is not None else 0)
 
     def tower_top(self, ydot, y) -> Optional[np.ndarray]:
-        """(5, 3) tower-top state [theta, V, Omega, Vdot, Omegadot] of the tower's tip node
-        (tip section frame), or None for a rigid tower."""
+        """(..., 5, 3) tower-top state [theta, V, Omega, Vdot, Omegadot] of the tower's tip
+        node (tip section frame) for states (..., n), or None for a rigid tower."""
         if self.tower is None:
             return None
-        return np.stack([y[self._tip_theta], y[self._tip_V], y[self._tip_Om],
-                         ydot[self._tip_V], ydot[self._tip_Om]])
+        return np.stack([y[..., self._tip_theta], y[..., self._tip_V], y[..., self._tip_Om],
+                         ydot[..., self._tip_V], ydot[..., self._tip_Om]], -2)
 
     def _air(self, q, t, tower=None):
         """What the blades' aerodynamic loads need from the rigid coordinates q (..., nq) at
@@ -229,14 +229,12 @@ class TurbineModel:
         y, ydot = np.asarray(y), np.asarray(ydot)
         if y.ndim == 2:
             return self._residual_batch(ydot, y, np.broadcast_to(t, y.shape[:1]))
-        if self.tower is not None:
-            return self._residual_tower(ydot, y, t)
         return self._residual_batch(ydot[None], y[None], np.reshape(t, 1))[0]
 
     def _residual_batch(self, ydot, y, t):
         """(K, n) residual rows at K instants t (K,)."""
-        if self.tower is not None:      # the flexible-tower rigid system is not batched
-            return np.stack([self._residual_tower(a, b, c) for a, b, c in zip(ydot, y, t)])
+        if self.tower is not None:
+            return self._residual_tower(ydot, y, t)
         K, nb, nbl = y.shape[0], self.n_blades, self.blade_size
         nq, nu, nr = self.nq, self.nu, self.nq + self.nu
         q, u = y[:, :nq], y[:, nq:nr]
@@ -255,21 +253,26 @@ class TurbineModel:
         return out
 
     def _residual_tower(self, ydot, y, t):
+        """(K, n) residual rows at K instants t (K,) with the flexible tower: the rigid
+        system on the tower top (its loads on the tower are the tower's tip loads)."""
+        K = y.shape[0]
         nq, nu, nr = self.nq, self.nu, self.nq + self.nu
         nb, nbl, to = self.n_blades, self.blade_size, self.layout.tower_offset
-        q, u = y[:nq], y[nq:nr]
-        qd, ud = ydot[:nq], ydot[nq:nr]
-        yb = y[nr:to].reshape(nb, nbl)
-        ydb = ydot[nr:to].reshape(nb, nbl)
-        tw = self.tower_top(ydot, y)
-        v, w = self.rigid.root_motion(q, u, t, tw)
-        g = self.rigid.gravity_in_root(q, t, tw) if self.gravity else None
-        rb = self._blade_residual(ydb, yb, v, w, g, self._air(q, t, tw))
+        q, u = y[:, :nq], y[:, nq:nr]
+        qd, ud = ydot[:, :nq], ydot[:, nq:nr]
+        yb = y[:, nr:to].reshape(K, nb, nbl)
+        ydb = ydot[:, nr:to].reshape(K, nb, nbl)
+        tw = self.tower_top(ydot, y)                                      # (K, 5, 3)
+        v, w = self.rigid.root_motion(q, u, t, tw)                        # (K, nb, 3)
+        g = self.rigid.gravity_in_root(q, t, tw).reshape(K * nb, 3) if self.gravity else None
+        rb = self._blade_residual(ydb.reshape(K * nb, nbl), yb.reshape(K * nb, nbl),
+                                  v.reshape(K * nb, 3), w.reshape(K * nb, 3), g,
+                                  self._air_flat(self._air(q, t, tw), K * nb))
         rk = self.rigid.kinematics(q, qd, u, t)
-        gf = self.rigid.generalized_forces(q, u, ud, t, yb[:, 0:3], yb[:, 3:6], tw)
-        rt = self._tower_residual(ydot[None, to:], y[None, to:], gf[None, nu:])
-        return np.concatenate([np.atleast_1d(rk), np.atleast_1d(gf[:nu]), rb.ravel(),
-                               rt.ravel()])
+        gf = self.rigid.generalized_forces(q, u, ud, t, yb[:, :, 0:3], yb[:, :, 3:6], tw)
+        rt = self._tower_residual(ydot[:, to:], y[:, to:], gf[:, nu:], K)
+        return np.concatenate([rk.reshape(K, nq), gf[:, :nu], rb.reshape(K, nb * nbl),
+                               rt.reshape(K, -1)], axis=1)
 
     def sparsity(self) -> sp.csr_matrix:
         """Structural pattern of dR/dy and dR/dydot (an over-estimate at block level)."""
@@ -383,49 +386,45 @@ class TurbineModel:
                               lambda Yd, Y, C: self._tower_residual(Yd, Y, tip, C),
                               yt[None], ydt[None], [to], Jy_parts, Jd_parts)
 
-        # blade rows w.r.t. rigid q, u and the tower-top theta, V, Omega (root motion, gravity)
+        # blade rows w.r.t. rigid q, u and the tower-top theta, V, Omega (root motion,
+        # gravity), all perturbations in one batched call
         tip_cols = np.concatenate([self._tip_theta, self._tip_V, self._tip_Om])
         xcols = np.concatenate([np.arange(nr), tip_cols])
-        x0 = np.concatenate([q, u, tw[0], tw[1], tw[2]])
-        vs, ws, gs, airs = [], [], [], []
-        for j in range(len(xcols)):
-            x = x0.astype(complex)
-            x[j] += 1j * h
-            twj = np.concatenate([x[nr:].reshape(3, 3), tw[3:].astype(complex)])
-            vj, wj = self.rigid.root_motion(x[:nq], x[nq:nr], t, twj)
-            vs.append(vj), ws.append(wj)
-            gs.append(self.rigid.gravity_in_root(x[:nq], t, twj) if self.gravity else None)
-            airs.append(self._air_flat(self._air(x[:nq], t, twj), nb))
         nx = len(xcols)
+        x = np.concatenate([q, u, tw[0], tw[1], tw[2]]) + 1j * h * np.eye(nx)   # (nx, nx)
+        twx = np.concatenate([x[:, nr:].reshape(nx, 3, 3),
+                              np.broadcast_to(tw[3:], (nx, 2, 3))], axis=1)
+        tt = np.full(nx, float(t))
+        vx, wx = self.rigid.root_motion(x[:, :nq], x[:, nq:nr], tt, twx)   # (nx, nb, 3)
+        gx = self.rigid.gravity_in_root(x[:, :nq], tt, twx).reshape(nx * nb, 3) \
+            if self.gravity else None
         r = self._blade_residual(np.tile(ydb, (nx, 1)), np.tile(yb, (nx, 1)).astype(complex),
-                                 np.concatenate(vs), np.concatenate(ws),
-                                 np.concatenate(gs) if self.gravity else None,
-                                 self._air_join(airs)).imag / h
+                                 vx.reshape(nx * nb, 3), wx.reshape(nx * nb, 3), gx,
+                                 self._air_flat(self._air(x[:, :nq], tt, twx), nx * nb)).imag / h
         r = r.reshape(nx, nb * nbl)
         rr, cc = np.nonzero(r.T)
         rows_y.append(nr + rr), cols_y.append(xcols[cc]), vals_y.append(r.T[rr, cc])
 
-        # rigid rows and tower-top loads w.r.t. rigid unknowns/rates, root loads, tower top
+        # rigid rows and tower-top loads w.r.t. rigid unknowns/rates, root loads, tower top:
+        # every perturbation of y, then of ydot, in one batched call
         out_rows = np.concatenate([np.arange(nr), self._tip_rows])
-
-        def rigid_rows(yy, yyd):
-            Fb = yy[nr:to].reshape(nb, nbl)
-            twx = self.tower_top(yyd, yy)
-            rk = np.atleast_1d(self.rigid.kinematics(yy[:nq], yyd[:nq], yy[nq:nr], t))
-            return np.concatenate([rk, self.rigid.generalized_forces(
-                yy[:nq], yy[nq:nr], yyd[nq:nr], t, Fb[:, 0:3], Fb[:, 3:6], twx)])
-
-        for cols, rr_, cc_, vv_, wrt_rate in (
-                (np.concatenate([np.arange(nr), self._root_cols, tip_cols]), rows_y, cols_y,
-                 vals_y, False),
-                (np.concatenate([np.arange(nr), self._tip_V, self._tip_Om]), rows_d, cols_d,
-                 vals_d, True)):
-            for col in cols:
-                yy, yyd = y.astype(complex), ydot.astype(complex)
-                (yyd if wrt_rate else yy)[col] += 1j * h
-                d = rigid_rows(yy, yyd).imag / h
-                nzr = np.flatnonzero(d)
-                rr_.append(out_rows[nzr]), cc_.append(np.full(len(nzr), col)), vv_.append(d[nzr])
+        cols_wrt_y = np.concatenate([np.arange(nr), self._root_cols, tip_cols])
+        cols_wrt_d = np.concatenate([np.arange(nr), self._tip_V, self._tip_Om])
+        ny, M = len(cols_wrt_y), len(cols_wrt_y) + len(cols_wrt_d)
+        yy = np.tile(y.astype(complex), (M, 1))
+        yyd = np.tile(ydot.astype(complex), (M, 1))
+        yy[np.arange(ny), cols_wrt_y] += 1j * h
+        yyd[ny + np.arange(M - ny), cols_wrt_d] += 1j * h
+        Fb = yy[:, nr:to].reshape(M, nb, nbl)
+        tm = np.full(M, float(t))
+        rk = self.rigid.kinematics(yy[:, :nq], yyd[:, :nq], yy[:, nq:nr], tm).reshape(M, nq)
+        d = np.concatenate([rk, self.rigid.generalized_forces(
+            yy[:, :nq], yy[:, nq:nr], yyd[:, nq:nr], tm, Fb[:, :, 0:3], Fb[:, :, 3:6],
+            self.tower_top(yyd, yy))], axis=1).imag / h                     # (M, nr + 6)
+        for part, cols, rr_, cc_, vv_ in ((d[:ny], cols_wrt_y, rows_y, cols_y, vals_y),
+                                          (d[ny:], cols_wrt_d, rows_d, cols_d, vals_d)):
+            pr, pc = np.nonzero(part)
+            rr_.append(out_rows[pc]), cc_.append(cols[pr]), vv_.append(part[pr, pc])
         shape = (self.n, self.n)
         Jy = sp.csc_matrix((np.concatenate(vals_y), (np.concatenate(rows_y),
                                                      np.concatenate(cols_y))), shape=shape)

@@ -100,11 +100,10 @@ def turn_e1_to(d) -> np.ndarray:
 
 def tip_basis(theta) -> np.ndarray:
     """``C(theta)^T``: columns = the deformed section basis B in the undeformed basis b, for
-    Rodrigues parameters theta (3,) (complex-safe)."""
+    Rodrigues parameters theta (..., 3) -> (..., 3, 3) (complex-safe)."""
     th = np.asarray(theta)
-    s = 0.25 * (th @ th)
-    sk = np.array([[0.0 * s, -th[2], th[1]], [th[2], 0.0 * s, -th[0]], [-th[1], th[0], 0.0 * s]])
-    return ((1 - s) * np.eye(3) + sk + 0.5 * np.outer(th, th)) / (1 + s)
+    s = (0.25 * dot(th, th))[..., None, None]
+    return ((1 - s) * np.eye(3) + skew(th) + 0.5 * th[..., :, None] * th[..., None, :]) / (1 + s)
 
 
 def rot_T_apply(theta, a):

@@ -256,7 +256,7 @@ class RigidSystem:
         flexible tower also T (the tower-top section frame; Y = T rot1(qy))."""
         qy, qh, _, _ = self._split(q, self.n_q)
         if self.flexible_tower:
-            Tt = tip_basis(self._tower_state(tower)[0])
+            Tt = tip_basis(self._tower_state(tower)[..., 0, :])
             Y = Tt @ rot1(qy)
         else:
             Tt = None
@@ -330,15 +330,15 @@ class RigidSystem:
 
     # ------------------------------------------------------------------ flexible tower
     def _tower_state(self, tower):
-        """(5, 3) tower-top state [theta, V, Omega, Vdot, Omegadot] (zeros when None)."""
+        """(..., 5, 3) tower-top state [theta, V, Omega, Vdot, Omegadot] (zeros when None)."""
         if tower is None:
             return np.zeros((5, 3))
         tw = np.asarray(tower)
-        if tw.ndim != 2 or tw.shape[1] != 3 or tw.shape[0] not in (3, 5):
-            raise ValueError(f"tower: expected shape (5, 3) (theta, V, Omega, Vdot, Omegadot "
-                             f"of the tower tip), got {tw.shape}")
-        if tw.shape[0] == 3:
-            tw = np.concatenate([tw, np.zeros((2, 3), dtype=tw.dtype)])
+        if tw.ndim < 2 or tw.shape[-1] != 3 or tw.shape[-2] not in (3, 5):
+            raise ValueError(f"tower: expected shape (..., 5, 3) (theta, V, Omega, Vdot, "
+                             f"Omegadot of the tower tip), got {tw.shape}")
+        if tw.shape[-2] == 3:
+            tw = np.concatenate([tw, np.zeros(tw.shape[:-2] + (2, 3), dtype=tw.dtype)], -2)
         return tw
 
     def _check_tower(self, tower):
@@ -348,41 +348,45 @@ class RigidSystem:
     def _kin_tower(self, q, u, t, tower):
         """Flexible-tower kinematics in N: velocities and partial velocities for the speeds
         z = (U1, U2, U3, U4, V_1..3, Omega_1..3) (yaw, teeter, shaft twist, generator, the
-        tower top; removed DOFs included, with zero partials)."""
+        tower top; removed DOFs included, with zero partials).  Batched: q (..., n_q),
+        u (..., n_u), t (...), tower (..., 5, 3); vectors (..., 3), partials (..., 10, 3)."""
         qy, qh, qd, qg = self._split(q, self.n_q)
-        U1, U2, U3, U4 = self._split(u, self.n_u)
+        U1, U2, U3, U4 = (np.asarray(x) for x in self._split(u, self.n_u))
         tw = self._tower_state(tower)
         fr = self.frames(q, t, tw)
         Tt, Y, S, H = fr["T"], fr["Y"], fr["S"], fr["H"]
-        y1, s3, h2 = Y[:, 0], S[:, 2], H[:, 1]
-        w_T = Tt @ tw[2]
-        v_T = Tt @ tw[1]
-        w_Y = w_T + U1 * y1
-        y1h2 = y1 @ h2
+        y1, s3, h2 = Y[..., :, 0], S[..., :, 2], H[..., :, 1]
+        w_T = _mv(Tt, tw[..., 2, :])
+        v_T = _mv(Tt, tw[..., 1, :])
+        w_Y = w_T + U1[..., None] * y1
+        y1h2 = _dot(y1, h2)
         z = 0.0 * h2
         if self.teeter:
-            wr1, wr2 = y1 - y1h2 * h2, h2
+            wr1, wr2 = y1 - y1h2[..., None] * h2, h2
         else:
             wr1, wr2 = y1, z
         N = self.gearbox_ratio
-        w_H = w_T + wr1 * U1 + wr2 * U2 + (self.omega0 + U3 + U4) * s3
-        w_G = w_Y + N * (self.omega0 + U4) * s3
+        w_H = (w_T + wr1 * U1[..., None] + wr2 * U2[..., None]
+               + (self.omega0 + U3 + U4)[..., None] * s3)
+        w_G = w_Y + N * (self.omega0 + U4)[..., None] * s3
         r_SH = self.shaft_height * y1 + self.d * s3
-        r_c = Y @ self.nacelle_cg
+        r_c = _mv(Y, self.nacelle_cg)
         v_SH = v_T + _cross(w_Y, r_SH)
-        rho = self.root_offset_hub @ H.T                       # (Nb, 3) in N
-        v_P = v_SH[None, :] + _cross(w_H[None, :], rho)
-        b = [Tt[:, j] for j in range(3)]                       # tower-top basis in N
-        zt = [z, z, z]                                         # no tower-top translation
-        wr_Y = np.array([y1, z, z, z] + zt + b)
-        wr_H = np.array([wr1, wr2, s3, s3] + zt + b)
-        wr_S = np.array([y1, z, s3, s3] + zt + b)
-        wr_E = np.array([y1, z, z, s3] + zt + b)               # gearbox input
-        wr_G = np.array([y1, z, z, N * s3] + zt + b)           # generator rotor
-        vr_SH = np.array([_cross(y1, r_SH), z, z, z] + b + [_cross(bj, r_SH) for bj in b])
-        vr_c = np.array([_cross(y1, r_c), z, z, z] + b + [_cross(bj, r_c) for bj in b])
-        vr_P = vr_SH[:, None, :] + _cross(wr_H[:, None, :], rho[None, :, :])   # (10, Nb, 3)
-        vr_T = np.array([z, z, z, z] + b + zt)                 # the tower-top point TY
+        rho = np.swapaxes(H @ self.root_offset_hub.T, -1, -2)       # (..., Nb, 3) in N
+        v_P = v_SH[..., None, :] + _cross(w_H[..., None, :], rho)
+        b = [Tt[..., :, j] for j in range(3)]                       # tower-top basis in N
+        zt = [z, z, z]                                              # no tower-top translation
+        rows = lambda vs: np.stack(vs, -2)                          # (..., 10, 3)
+        wr_Y = rows([y1, z, z, z] + zt + b)
+        wr_H = rows([wr1, wr2, s3, s3] + zt + b)
+        wr_S = rows([y1, z, s3, s3] + zt + b)
+        wr_E = rows([y1, z, z, s3] + zt + b)                        # gearbox input
+        wr_G = rows([y1, z, z, N * s3] + zt + b)                    # generator rotor
+        vr_SH = rows([_cross(y1, r_SH), z, z, z] + b + [_cross(bj, r_SH) for bj in b])
+        vr_c = rows([_cross(y1, r_c), z, z, z] + b + [_cross(bj, r_c) for bj in b])
+        vr_P = vr_SH[..., :, None, :] + _cross(wr_H[..., :, None, :],
+                                               rho[..., None, :, :])  # (..., 10, Nb, 3)
+        vr_T = rows([z, z, z, z] + b + zt)                          # the tower-top point TY
         return dict(vr_T=vr_T, qy=qy, qh=qh, qd=qd, U1=U1, U2=U2, U3=U3, U4=U4, fr=fr, tw=tw,
                     Tt=Tt, y1=y1, s3=s3, h2=h2, w_G=w_G, wr_S=wr_S, wr_E=wr_E, wr_G=wr_G,
                     y1h2=y1h2, w_T=w_T, v_T=v_T, w_Y=w_Y, w_H=w_H, wr1=wr1, wr2=wr2,
@@ -390,75 +394,79 @@ class RigidSystem:
                     vr_SH=vr_SH, vr_c=vr_c, vr_P=vr_P)
 
     def _kane_tower(self, q, u, udot, t, Fb, Mb, tower):
-        """Kane's F_r + F_r* for z = (U1, U2, U3, U4, V_1..3, Omega_1..3), flexible tower."""
+        """Kane's F_r + F_r* for z = (U1, U2, U3, U4, V_1..3, Omega_1..3), flexible tower;
+        batched as _kin_tower (Fb, Mb (..., Nb, 3)), result (..., n_u + 6)."""
         k = self._kin_tower(q, u, t, tower)
-        Ud1, Ud2, Ud3, Ud4 = self._split(udot, self.n_u)
+        Ud1, Ud2, Ud3, Ud4 = (np.asarray(x)[..., None] for x in self._split(udot, self.n_u))
         U1, U2, qy, qh = k["U1"], k["U2"], k["qy"], k["qh"]
         U3, U4 = k["U3"], k["U4"]
         tw, Tt = k["tw"], k["Tt"]
         y1, s3, h2 = k["y1"], k["s3"], k["h2"]
         w_T, v_T, w_Y, w_H = k["w_T"], k["v_T"], k["w_Y"], k["w_H"]
         Y, H, B = k["fr"]["Y"], k["fr"]["H"], k["fr"]["B"]
+        gen = lambda P, v: np.einsum("...ri,...i->...r", P, v)     # partials . vector
         # --- accelerations (tower top: a_T = T (Vdot + Omega x V), alpha_T = T Omegadot)
-        alpha_T = Tt @ tw[4]
-        a_T = Tt @ tw[3] + _cross(w_T, v_T)
+        alpha_T = _mv(Tt, tw[..., 4, :])
+        a_T = _mv(Tt, tw[..., 3, :]) + _cross(w_T, v_T)
         y1dot = _cross(w_T, y1)
-        alpha_Y = alpha_T + Ud1 * y1 + U1 * y1dot
+        alpha_Y = alpha_T + Ud1 * y1 + U1[..., None] * y1dot
         s3dot = _cross(w_Y, s3)
         h2dot = _cross(w_H, h2)
         if self.teeter:
-            wr1dot = y1dot - ((y1dot @ h2 + y1 @ h2dot) * h2 + k["y1h2"] * h2dot)
+            wr1dot = y1dot - ((_dot(y1dot, h2) + _dot(y1, h2dot))[..., None] * h2
+                              + k["y1h2"][..., None] * h2dot)
             wr2dot = h2dot
         else:
             wr1dot = y1dot
             wr2dot = 0.0 * h2
         alpha_H = (alpha_T + k["wr1"] * Ud1 + k["wr2"] * Ud2 + (Ud3 + Ud4) * s3
-                   + wr1dot * U1 + wr2dot * U2 + (self.omega0 + U3 + U4) * s3dot)
+                   + wr1dot * U1[..., None] + wr2dot * U2[..., None]
+                   + (self.omega0 + U3 + U4)[..., None] * s3dot)
         r_SH, r_c = k["r_SH"], k["r_c"]
         a_SH = a_T + _cross(alpha_Y, r_SH) + _cross(w_Y, _cross(w_Y, r_SH))
         a_c = a_T + _cross(alpha_Y, r_c) + _cross(w_Y, _cross(w_Y, r_c))
         # --- generalized inertia forces (hub at SH, nacelle at its mass centre)
-        I_H = H @ self.hub_inertia @ H.T
-        I_Y = Y @ self.nacelle_inertia @ Y.T
-        T_H = -(I_H @ alpha_H + _cross(w_H, I_H @ w_H))
-        T_Y = -(I_Y @ alpha_Y + _cross(w_Y, I_Y @ w_Y))
-        Fstar = (k["wr_H"] @ T_H + k["vr_SH"] @ (-self.hub_mass * a_SH)
-                 + k["wr_Y"] @ T_Y + k["vr_c"] @ (-self.nacelle_mass * a_c)
-                 + k["vr_T"] @ (-self.yaw_bearing_mass * a_T))
+        I_H = H @ self.hub_inertia @ np.swapaxes(H, -1, -2)
+        I_Y = Y @ self.nacelle_inertia @ np.swapaxes(Y, -1, -2)
+        T_H = -(_mv(I_H, alpha_H) + _cross(w_H, _mv(I_H, w_H)))
+        T_Y = -(_mv(I_Y, alpha_Y) + _cross(w_Y, _mv(I_Y, w_Y)))
+        Fstar = (gen(k["wr_H"], T_H) + gen(k["vr_SH"], -self.hub_mass * a_SH)
+                 + gen(k["wr_Y"], T_Y) + gen(k["vr_c"], -self.nacelle_mass * a_c)
+                 + gen(k["vr_T"], -self.yaw_bearing_mass * a_T))
         if self.generator_inertia:
             N = self.gearbox_ratio
-            alpha_G = alpha_Y + N * Ud4 * s3 + N * (self.omega0 + U4) * s3dot
-            Fstar = Fstar + k["wr_G"] @ self._generator_inertia_torque(alpha_G, k["w_G"], s3)
+            alpha_G = alpha_Y + N * Ud4 * s3 + N * (self.omega0 + U4)[..., None] * s3dot
+            Fstar = Fstar + gen(k["wr_G"], self._generator_inertia_torque(alpha_G, k["w_G"],
+                                                                           s3))
+        gN = np.array([-self.g, 0.0, 0.0])
         if self.counterweight_mass:
             # the counterweight at SH + rho_c (hub-fixed), with its weight
-            rho_c = H @ self.counterweight_offset
-            vr_cw = k["vr_SH"] + _cross(k["wr_H"], rho_c[None, :])
+            rho_c = _mv(H, self.counterweight_offset)
+            vr_cw = k["vr_SH"] + _cross(k["wr_H"], rho_c[..., None, :])
             a_cw = a_SH + _cross(alpha_H, rho_c) + _cross(w_H, _cross(w_H, rho_c))
-            Fstar = Fstar + vr_cw @ (self.counterweight_mass
-                                     * (np.array([-self.g, 0.0, 0.0]) - a_cw))
+            Fstar = Fstar + gen(vr_cw, self.counterweight_mass * (gN - a_cw))
         # --- generalized active forces
-        F_N = np.einsum("kij,kj->ki", B, Fb)
-        M_N = np.einsum("kij,kj->ki", B, Mb)
-        gN = np.array([-self.g, 0.0, 0.0])
-        F = np.einsum("rki,ki->r", k["vr_P"], F_N) + k["wr_H"] @ M_N.sum(axis=0)
-        F = F + k["vr_SH"] @ (self.hub_mass * gN) + k["vr_c"] @ (self.nacelle_mass * gN)
-        F = F + k["vr_T"] @ (self.yaw_bearing_mass * gN)
-        # yaw spring/damper between Y and the tower top: works only through U1
-        yaw_t = -self.k_yaw * qy - self.c_yaw * U1
-        F = F + np.concatenate([[yaw_t], np.zeros(9)])
+        F_N = _mv(B, Fb)
+        M_N = _mv(B, Mb)
+        F = (np.einsum("...rki,...ki->...r", k["vr_P"], F_N) + gen(k["wr_H"], M_N.sum(axis=-2))
+             + gen(k["vr_SH"], self.hub_mass * gN) + gen(k["vr_c"], self.nacelle_mass * gN)
+             + gen(k["vr_T"], self.yaw_bearing_mass * gN))
+        # yaw spring/damper between Y and the tower top: works only through U1; the
+        # generator torque on the generator row
+        drive = self._rows(yaw=-self.k_yaw * qy - self.c_yaw * U1,
+                           generator=self._generator_torque_row(t))
+        F = F + np.concatenate([drive, np.zeros(drive.shape[:-1] + (6,))], -1)
         if self.teeter:
             qhdot = U1 * k["y1h2"] - U2
-            tau = (self.k_teeter * qh + self.c_teeter * qhdot) * h2   # on H, reaction on S
-            F = F + (k["wr_H"] - k["wr_S"]) @ tau
+            tau = (self.k_teeter * qh + self.c_teeter * qhdot)[..., None] * h2   # on H
+            F = F + gen(k["wr_H"] - k["wr_S"], tau)                             # reaction on S
         if self.shaft_flexible:
             # shaft spring and damper on S about s3, reaction on the gearbox input E
-            tau = -(self.k_shaft * k["qd"] + self.c_shaft * U3) * s3
-            F = F + (k["wr_S"] - k["wr_E"]) @ tau
-        if self.controls is not None:
-            F = F + np.concatenate([[0.0, 0.0, 0.0, self._generator_torque_row(t)],
-                                    np.zeros(6)])
+            tau = -(self.k_shaft * k["qd"] + self.c_shaft * U3)[..., None] * s3
+            F = F + gen(k["wr_S"] - k["wr_E"], tau)
         res = F + Fstar
-        return np.concatenate([self._join(res[0], res[1], res[2], res[3]), res[4:]])
+        return np.concatenate([self._join(*(res[..., r] for r in range(4))), res[..., 4:]],
+                              -1)
 
     def generalized_forces(self, q, u, udot, t, root_force, root_moment, tower=None):
         """Kane's ``F_r + F_r*`` for every generalized speed: (n_u,) without a flexible tower
@@ -473,8 +481,8 @@ class RigidSystem:
         Fb = np.asarray(root_force)
         Mb = np.asarray(root_moment)
         nb = self.n_blades
-        if Fb.shape != (nb, 3) or Mb.shape != (nb, 3):
-            raise ValueError(f"root loads must have shape ({nb}, 3)")
+        if Fb.shape[-2:] != (nb, 3) or Mb.shape[-2:] != (nb, 3):
+            raise ValueError(f"root loads must have shape (..., {nb}, 3)")
         return self._kane_tower(q, u, udot, t, Fb, Mb, tower)
 
     def tower_top_loads(self, q, u, udot, t, root_force, root_moment, tower=None):
@@ -493,8 +501,8 @@ class RigidSystem:
         if self.flexible_tower:
             k = self._kin_tower(q, u, t, tower)
             B = k["fr"]["B"]
-            v = np.einsum("kji,kj->ki", B, k["v_P"])
-            w = np.einsum("kji,j->ki", B, k["w_H"])
+            v = np.einsum("...kji,...kj->...ki", B, k["v_P"])
+            w = np.einsum("...kji,...j->...ki", B, k["w_H"])
             return v, self._with_pitch_rate(w, t)
         self._check_tower(tower)
         k = self._kin(q, u, t)

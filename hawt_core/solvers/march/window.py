@@ -168,13 +168,11 @@ class WindowSolver:
             lu = sla.lu_factor(As, check_finite=True)
         except (ValueError, sla.LinAlgError) as exc:
             raise WindowFailure(f"singular Newton matrix ({exc})") from exc
-        Ainv = sla.lu_solve(lu, np.eye(self.n))
-        if not np.all(np.isfinite(Ainv)):
-            raise WindowFailure("singular Newton matrix")
         Bs = B * (self.row[:, None] * self.sc[self.di][None, :])
-        self.A0s, self.Bs0, self.Ainv0 = As, Bs, Ainv
-        self.P0 = -Ainv @ Bs
-        self._set(self.Ainv0, self.P0)
+        self.A0s, self.Bs0, self._lu0 = As, Bs, lu
+        self.Ainv0 = self.P0 = self.Ainv = self.P = None
+        if self.azimuth_updates:        # the rigid-body updates need the inverse
+            self._form_inverse()
         self.h = h
         self.base_age = 0
         self.pending_refresh = False
@@ -227,6 +225,15 @@ class WindowSolver:
         self._set(Ainv, P)
         self.updates += 1
 
+    def _form_inverse(self):
+        """The base's inverse and propagator P = -A^-1 B (dense), formed only when needed:
+        windows of one step (a controller step of the closed loop) use the LU alone."""
+        Ainv = sla.lu_solve(self._lu0, np.eye(self.n))
+        if not np.all(np.isfinite(Ainv)):
+            raise WindowFailure("singular Newton matrix")
+        self.Ainv0, self.P0 = Ainv, -Ainv @ self.Bs0
+        self._set(self.Ainv0, self.P0)
+
     def _set(self, Ainv, P):
         self.Ainv, self.P = Ainv, P
         self.Pd = np.ascontiguousarray(P[self.di])
@@ -252,6 +259,8 @@ class WindowSolver:
         """Scaled Newton correction of the whole window: d_k = -A^-1 G_k + P d_{k-1}.
         The recurrence runs on the differential part only (P's rows there, contiguous);
         the other rows follow in one product."""
+        if self.Ainv is None:           # one step, the base's LU (solve: window of K > 1)
+            return sla.lu_solve(self._lu0, (G * (-self.row)).T).T
         D = (G * (-self.row)) @ self.Ainv.T
         Dd = D[:, self.di]
         Pd = self.Pd
@@ -275,6 +284,8 @@ class WindowSolver:
         elif self.azimuth_updates:
             # the next window (same length) reuses values computed now at its centre
             self.update_rigid(xc, yn, tc, h, t_next=tc + K * h)
+        if K > 1 and self.Ainv is None:
+            self._form_inverse()
         self.base_age += 1
         dn_old = None
         theta = 0.0
