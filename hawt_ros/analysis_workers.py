@@ -181,8 +181,20 @@ def _worker_main(conn, turbine, kwargs, cancel_event, node_pid) -> None:
 
     try:
         t0 = time.perf_counter()
-        result = be.modal_analysis(turbine, progress=progress, cancel=cancel_event.is_set,
-                                   **kwargs)
+        if kwargs.get("wind_speed"):
+            # the node runs in wind: the aeroelastic analysis at its operating point
+            from hawt_core.analyses.modal import modal_at_operating_point
+            kw = dict(kwargs)
+            result = modal_at_operating_point(
+                turbine, kw.pop("wind_speed"), kw.pop("discon"),
+                wind_direction=kw.pop("wind_direction", 0.0),
+                rotor_speed=kw.pop("rotor_speed", None) or None, progress=progress,
+                cancel=cancel_event.is_set, **kw)
+        else:
+            kwargs = {k: v for k, v in kwargs.items() if k not in ("wind_speed", "discon",
+                                                                    "wind_direction")}
+            result = be.modal_analysis(turbine, progress=progress, cancel=cancel_event.is_set,
+                                       **kwargs)
         plain = result_to_plain(result)
         if not math.isfinite(plain["compute_time"]):
             plain["compute_time"] = time.perf_counter() - t0

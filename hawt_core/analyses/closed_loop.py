@@ -9,8 +9,6 @@ initial wind speed (analyses/operating_points.py).
 """
 from __future__ import annotations
 
-import math
-from dataclasses import replace
 from typing import Optional
 
 from ..control.builtin import BuiltinController
@@ -18,7 +16,7 @@ from ..control.discon import DisconController
 from ..control.loop import ActuatorLimits, ClosedLoop
 from ..io.discon import discon_schedule, read_discon
 from .controller_design import builtin_gains
-from .operating_points import operating_points
+from .operating_points import at_operating_point
 
 __all__ = ["closed_loop", "CONTROLLERS"]
 
@@ -48,14 +46,7 @@ def closed_loop(turbine, wind, controller: str = "rosco", discon=None,
         schedule = discon_schedule(discon)
     limits = ActuatorLimits.from_discon(read_discon(discon) if discon is not None else {})
     if operating_point:
-        U = float(wind.hub_speed(0.0))
-        point = operating_points(turbine, [U], schedule).points[0]
-        if not point["converged"]:
-            raise ValueError(f"wind: no operating point at {U:g} m/s under the schedule: "
-                             f"{point.get('error')}")
-        turbine = replace(turbine, rotor=replace(
-            turbine.rotor, speed=point["rotor_speed_rpm"] * math.pi / 30,
-            pitch=-math.radians(point["pitch_deg"])))
+        turbine = at_operating_point(turbine, float(wind.hub_speed(0.0)), schedule)[0]
     nb = int(turbine.rotor.blades)
     ctrl = DisconController(discon, dt, nb) if controller == "rosco" else \
         BuiltinController(builtin_gains(turbine, schedule), dt, nb)

@@ -335,6 +335,24 @@ def modal_analysis(turbine: Turbine, elements: Optional[int] = None,
                                max_per_rev, progress, cancel, wind, rho, inflow, airfoil)
 
 
+def modal_at_operating_point(turbine: Turbine, wind_speed: float, discon,
+                             wind_direction: float = 0.0, rotor_speed: Optional[float] = None,
+                             **kwargs) -> ModalResult:
+    """The aeroelastic modal analysis of ``turbine`` where it operates in a steady wind of
+    ``wind_speed`` [m/s] and ``wind_direction`` [rad]: rotor speed and pitch of the
+    schedule's operating point there (the DISCON.IN ``discon``'s schedule, as ``hawt
+    operating-points`` and the closed loop use it; ``rotor_speed`` given [rad/s]: that speed
+    with the schedule's pitch); ``kwargs``: those of :func:`modal_analysis`.  What the ROS
+    node's modal_analysis service answers while the node runs in wind."""
+    from ..io.discon import discon_schedule
+    from .operating_points import at_operating_point
+    at, point = at_operating_point(turbine, wind_speed, discon_schedule(discon), rotor_speed)
+    result = modal_analysis(at, wind=Wind(float(wind_speed), direction=float(wind_direction)),
+                            **kwargs)
+    result.settings["operating_point"] = point
+    return result
+
+
 def _modal_analysis(turbine, elements, rotor_speed, steps, method, fast, harmonics,
                     max_per_rev, progress, cancel, wind=None, rho=1.225, inflow="frozen",
                     airfoil="quasi-steady") -> ModalResult:

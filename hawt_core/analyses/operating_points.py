@@ -19,7 +19,7 @@ from scipy.optimize import brentq
 from ..assembly.aero_blade import AeroelasticBlade
 from ..results.operating import OperatingPoints
 
-__all__ = ["operating_points", "DEFAULT_ELEMENTS"]
+__all__ = ["operating_points", "at_operating_point", "DEFAULT_ELEMENTS"]
 
 #: Elements per blade of the operating-point model: for the NREL 5-MW at 8 m/s, power and
 #: thrust at 16 are within 0.1 % of 64, the tip deflection within 2.2 % (32: 0.4 %);
@@ -120,3 +120,19 @@ def operating_points(turbine, wind_speeds, schedule: dict, elements: Optional[in
                            settings={"elements": n_el, "density": rho,
                                      "model": "one blade per blade on the spinning hub, BEM "
                                               "(Prandtl, Buhl) at the Gauss points, axial wind"})
+
+
+def at_operating_point(turbine, wind_speed: float, schedule: dict, rotor_speed=None):
+    """(turbine, point): ``turbine`` with the rotor speed [rad/s] and pitch of the schedule's
+    operating point at ``wind_speed`` [m/s] (``rotor_speed`` given: that speed, the
+    schedule's pitch) and that point (operating_points' dict).  ValueError naming the wind
+    when the schedule has no converged point there."""
+    import math
+    U = float(wind_speed)
+    point = operating_points(turbine, [U], schedule).points[0]
+    if not point["converged"]:
+        raise ValueError(f"wind: no operating point at {U:g} m/s under the schedule: "
+                         f"{point.get('error')}")
+    speed = point["rotor_speed_rpm"] * math.pi / 30 if not rotor_speed else float(rotor_speed)
+    return replace(turbine, rotor=replace(turbine.rotor, speed=speed,
+                                          pitch=-math.radians(point["pitch_deg"]))), point

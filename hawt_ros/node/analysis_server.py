@@ -29,6 +29,16 @@ class AnalysisServer:
                                 steps=int(steps), method=method,
                                 default_elements=self._analysis_elements)
 
+    def _job_kwargs(self, req) -> dict:
+        """The analysis of a request: in wind, the aeroelastic one at the operating point of
+        the wind the node is in now (its speed and direction, the controller's schedule)."""
+        kwargs = req.as_kwargs()
+        if self.in_wind:
+            wind = self.sim.wind
+            kwargs.update(wind_speed=float(wind.speed), wind_direction=float(wind.direction),
+                          discon=str(self._discon_path))
+        return kwargs
+
     def _settings_msg(self, req=None, result=None) -> AnalysisSettings:
         s = AnalysisSettings()
         rs = (result or {}).get("settings", {}) if result else {}
@@ -129,7 +139,7 @@ class AnalysisServer:
         except ParameterError as exc:
             self.get_logger().warning(f"modal_analysis request rejected: {exc}")
             return self._fill(response, None, None, error=f"invalid request: {exc}")
-        job = self.runner.submit(req.as_kwargs(), shareable=True)
+        job = self.runner.submit(self._job_kwargs(req), shareable=True)
         if not job.done():
             if not self._enter_blocking():
                 return self._fill(response, None, req, error=(
@@ -175,7 +185,7 @@ class AnalysisServer:
                 progress.append((fraction, stage))
 
         try:
-            job = self.runner.submit(req.as_kwargs(), shareable=False)
+            job = self.runner.submit(self._job_kwargs(req), shareable=False)
             self._goal_jobs[key] = job
             job.add_progress_callback(on_progress)
             if job.cached:

@@ -208,6 +208,7 @@ class HawtNode(Pacing, StatePublisher, Recording, AnalysisServer, Overrides, Nod
             raise StartupError(f"parameter controller: {name!r}: the rosco wheel ships no "
                                f"DISCON.IN for turbine {self.turbine_path}; give a DISCON.IN "
                                "path")
+        self._discon_path = discon
         if s.perturb:
             raise StartupError("parameter perturb: not used with wind > 0 (the turbine starts "
                                "at its operating point)")
