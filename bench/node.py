@@ -119,17 +119,16 @@ def wait_for(cond, timeout):
     return False
 
 
-def bench_publishing(rate: float, rtf: float, duration: float, domain: int, tmp: Path,
-                     step_deg: float, fake: bool) -> dict:
-    node = Node({"turbine": "paper", "wind": 0.0, "publish_rate": rate,
-                 "real_time_factor": rtf, "step_deg": step_deg, "perturb": "teeter=0.02"},
-                domain, tmp, fake="simulate" if fake else "",
-                env={"HAWT_FAKE_STEP_COST": "0.001"} if fake else None)
+def _collect(node, domain: int, duration: float, first_timeout: float):
+    """(joint-state items received over ``duration`` s after the first one, seconds to the
+    first one); the node is stopped at the end."""
     cli = Client(domain)
     try:
         cli.subscribe_joint_states()
-        if not wait_for(lambda: len(cli.items) > 0, 60):
+        t0 = time.monotonic()
+        if not wait_for(lambda: len(cli.items) > 0, first_timeout):
             raise RuntimeError(f"no messages; node log:\n{node.log.read_text()}")
+        start_up = time.monotonic() - t0
         n0 = len(cli.items)
         time.sleep(duration)   # the measurement window (a benchmark, not a test)
         with cli.lock:
@@ -137,6 +136,16 @@ def bench_publishing(rate: float, rtf: float, duration: float, domain: int, tmp:
     finally:
         node.stop()
         cli.close()
+    return items, start_up
+
+
+def bench_publishing(rate: float, rtf: float, duration: float, domain: int, tmp: Path,
+                     step_deg: float, fake: bool) -> dict:
+    node = Node({"turbine": "paper", "wind": 0.0, "publish_rate": rate,
+                 "real_time_factor": rtf, "step_deg": step_deg, "perturb": "teeter=0.02"},
+                domain, tmp, fake="simulate" if fake else "",
+                env={"HAWT_FAKE_STEP_COST": "0.001"} if fake else None)
+    items, _ = _collect(node, domain, duration, 60.0)
     mono = np.array([i[0] for i in items])
     wall = np.array([i[1] for i in items], float)
     st = np.array([i[2] for i in items], float)
@@ -192,20 +201,7 @@ def bench_wind_fast(domain: int, tmp: Path, duration: float) -> dict:
     """The default node (NREL 5-MW, 15 m/s, ROSCO) as fast as possible: achieved real-time
     factor from the stamps (simulation time) over ``duration`` s of wall time."""
     node = Node({"real_time_factor": 0.0, "publish_rate": 20.0}, domain, tmp)
-    cli = Client(domain)
-    try:
-        cli.subscribe_joint_states()
-        t0 = time.monotonic()
-        if not wait_for(lambda: len(cli.items) > 0, 120):
-            raise RuntimeError(f"no messages; node log:\n{node.log.read_text()}")
-        start_up = time.monotonic() - t0
-        n0 = len(cli.items)
-        time.sleep(duration)
-        with cli.lock:
-            items = cli.items[n0:]
-    finally:
-        node.stop()
-        cli.close()
+    items, start_up = _collect(node, domain, duration, 120.0)
     mono = np.array([i[0] for i in items])
     st = np.array([i[2] for i in items], float)
     return {"start_up": start_up, "rtf": ((st[-1] - st[0]) / 1e9) / (mono[-1] - mono[0])}

@@ -184,13 +184,6 @@ class TurbineModel:
             return None
         return {k: np.tile(a, (C,) + (1,) * (a.ndim - 1)) for k, a in air.items()}
 
-    @staticmethod
-    def _air_join(airs):
-        """Flat root data of several batches, concatenated (None in a vacuum)."""
-        if airs[0] is None:
-            return None
-        return {k: np.concatenate([a[k] for a in airs]) for k in airs[0]}
-
     def _blade_pattern(self):
         """Sparsity of one blade block's rows w.r.t. its unknowns: the beam's blocks and the
         aerodynamic states of each Gauss point."""
