@@ -963,7 +963,8 @@ def test_node_in_wind_operates_the_nrel5mw_under_rosco(spawn, tmp_path):
     rotor_state (hawt_msgs/RotorState) at the joint states' stamps: the same rotor speed and
     pitch; the gearbox ratio 97 between the speeds; electrical = mechanical power x VS_GenEff
     (94.4 %, the DISCON.IN) to 1e-9; electrical power at VS_RtPwr (5 MW) within 5 %; the
-    tower top pushed downwind by the thrust (z > 0, below 2 m); pitch_override true while the
+    tower top pushed downwind by the thrust (z > 0, below 2 m); the aerodynamic torque x rotor
+    speed within 10 % of the shaft power (a nearly steady rotor); pitch_override true while the
     command holds, false after the release.  The recording (MCAP) holds rotor_state, read by
     rosbags after SIGINT.  Bounded: at most ~360 s."""
     pytest.importorskip("rosco")
@@ -994,6 +995,9 @@ def test_node_in_wind_operates_the_nrel5mw_under_rosco(spawn, tmp_path):
         assert 0.0 < r.tower_top_displacement.z < 2.0
         assert r.wind_speed == pytest.approx(15.0) and r.header.frame_id == "tower"
         assert not r.pitch_override and r.controller == "rosco"
+        # the torque balance of the (nearly) steady rotor: aerodynamic power ~ shaft power
+        assert abs(r.aerodynamic_torque * r.rotor_speed / r.mechanical_power - 1) < 0.1
+        assert len(r.aerodynamic_force) == 3 and r.aerodynamic_thrust > 1e5
     last = js.msgs()[-1]
     assert list(last.name) == ["yaw", "teeter", "rotor_azimuth", "blade_0_pitch",
                                "blade_1_pitch", "blade_2_pitch", "generator"]

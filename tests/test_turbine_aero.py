@@ -299,3 +299,46 @@ def test_simulated_teeter_decay_is_locks_damping():
     found = np.log(q[a] / q[b]) / (tt[b] - tt[a])
     print(f"\nsimulated decay {found:.6f} 1/s, Lock {rate:.6f} 1/s")
     assert found == pytest.approx(rate, rel=5e-3)
+
+
+def _shaft_totals(model, y, t=0.0):
+    """(aerodynamic torque about the shaft axis through the hub centre SH [N m], thrust of
+    blade 0 along it [N], blade 0's root force along it [N]) at the state y, from
+    TurbineModel.aero_loads turned into N with the rigid frames (here, not in the code)."""
+    F, M = model.aero_loads(y, t)
+    q = y[:model.nq]
+    fr = model.rigid.frames(q, t)
+    B, s3 = fr["B"], fr["S"][:, 2]
+    P = model.rigid.root_points(q, t) - model.rigid.teeter_point(fr)     # from SH, in N
+    FN, MN = np.einsum("kij,kj->ki", B, F), np.einsum("kij,kj->ki", B, M)
+    torque = float(sum(s3 @ (np.cross(P[k], FN[k]) + MN[k]) for k in range(len(F))))
+    root = B[0] @ y[model.layout.blade(0).root_force]
+    return torque, float(s3 @ FN[0]), float(s3 @ root)
+
+
+def test_integrated_aerodynamic_loads_carry_the_shaft_torque_and_the_root_thrust():
+    """Reference: the equilibrium of the steady state (NREL 5-MW, axisymmetric: rigid tower,
+    no tilt or gravity; 8 m/s, 9.16 rpm): in steady rotation the inertial loads have no
+    component along the shaft axis and no moment about it, so the aerodynamic loads
+    integrated along the blades (TurbineModel.aero_loads, what the node's rotor_state
+    carries) balance the shaft's torque (its twist x stiffness) and, along the shaft, each
+    blade's root force, in the limit of the mesh.  The mixed elements converge to it at
+    second order: torque 3.1e-3, 6.4e-4, 1.5e-4 apart at 8, 16, 32 elements (each < 1.3 x
+    the h^2 bound 3.2e-3 (8 / N)^2; ratio of successive errors > 3.5), thrust < 2e-4 and
+    decreasing.  In a vacuum the loads are zero."""
+    t = axisymmetric(nrel5mw())
+    errors = []
+    for n in (8, 16, 32):
+        model = TurbineModel(t, elements=n, wind=Wind(8.0))
+        y = constant_steady_state(model)
+        torque, thrust, root = _shaft_totals(model, y)
+        shaft = t.drivetrain.stiffness * y[model.layout["shaft_twist"]]
+        assert torque > 1e6                             # ~2 MN m: the rotor drives the shaft
+        errors.append((abs(torque / shaft - 1), abs(thrust / root - 1)))
+    for n, (e_torque, e_thrust) in zip((8, 16, 32), errors):
+        assert e_torque < 1.3 * 3.2e-3 * (8 / n) ** 2 and e_thrust < 2e-4, errors
+    assert errors[0][0] / errors[1][0] > 3.5 and errors[1][0] / errors[2][0] > 3.5, errors
+    assert errors[0][1] > errors[1][1] > errors[2][1], errors
+    vacuum = TurbineModel(t, elements=4)
+    F, M = vacuum.aero_loads(vacuum.initial_guess(), 0.0)
+    assert not F.any() and not M.any()

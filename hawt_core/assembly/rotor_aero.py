@@ -278,5 +278,8 @@ class RotorAerodynamics:
             if rows:
                 out["rows"] = np.stack(rows).transpose(3, 0, 1, 2).reshape(
                     rows[0].shape[-1], -1)
-            return st.from_section(force), st.from_section(moment)
+            f_sec, m_sec = st.from_section(force), st.from_section(moment)
+            # what TurbineModel.aero_loads integrates
+            out["loads"] = (f_sec, m_sec, sec["theta"], sec["position"])
+            return f_sec, m_sec
         return section_loads

@@ -29,6 +29,7 @@ from ..fem.sections import mesh_beam
 from ..model import Turbine
 from ..numerics.jacobian import (STEP, ColouredJacobian, beam_station_pattern,
                                  block_tridiagonal_pattern)
+from ..numerics.rotations import cross, rot_T_apply
 from ..rigid import RigidSystem
 from .layout import StateLayout
 from .rotor_aero import RotorAerodynamics
@@ -91,6 +92,7 @@ class TurbineModel:
         #: unknowns per blade: its beam's, then its aerodynamic states
         self.n_aero = self.aero.n if self.aero is not None else 0
         self.blade_size = self.beam.n + self.n_aero
+        self._capture = None      # a dict the aerodynamics fill during one residual (aero_loads)
         self.layout = StateLayout(self.rigid, self.n_blades, self.beam, self.tower,
                                   aero_states=self.aero.state_names if self.n_aero else ())
         self.n = self.layout.n
@@ -197,7 +199,8 @@ class TurbineModel:
         if air is None:
             return self.beam.residual(ydb, yb, v, w, g)
         nb = self.beam.n
-        out = {} if out is None else out
+        if out is None:
+            out = self._capture if self._capture is not None else {}
         rb = self.beam.residual(ydb[:, :nb], yb[:, :nb], v, w, g, wind=air["vectors"],
                                 section_loads=self.aero.loads(air, yb[:, nb:], ydb[:, nb:],
                                                               out))
@@ -211,6 +214,28 @@ class TurbineModel:
         g = None if self._tower_g is None else np.repeat(self._tower_g, batch, axis=0)
         tl = np.broadcast_to(tip_loads, (batch, 6))
         return self.tower.residual(ydt, yt, z, z, g, tl[:, :3], tl[:, 3:])
+
+    def aero_loads(self, y, t):
+        """Aerodynamic loads on each blade at the state ``y`` and time ``t`` [s], integrated
+        along the span: (force, moment), (Nb, 3), in each blade's root frame b [N], the
+        moment about its root point [N m]: the residual's section loads turned from the
+        section frames into b and integrated with the beam's Gauss rule.  They depend on the
+        state only (no added mass), so no rates are needed.  Zeros in a vacuum."""
+        nb = self.n_blades
+        if self.aero is None:
+            return np.zeros((nb, 3)), np.zeros((nb, 3))
+        y = np.asarray(y, float)
+        self._capture = captured = {}
+        try:
+            self.residual(np.zeros_like(y), y, t)
+        finally:
+            self._capture = None
+        f, m, theta, position = captured["loads"]                        # (N, G, Nb, 3)
+        fb, mb = rot_T_apply(theta, f), rot_T_apply(theta, m)
+        weights = self.beam.h[:, None] * self.beam.w[None, :]              # (N, G)
+        F = np.einsum("ng,ngbi->bi", weights, fb)
+        M = np.einsum("ng,ngbi->bi", weights, cross(position, fb) + mb)
+        return np.real(F), np.real(M)
 
     # ------------------------------------------------------------------ residual
     def residual(self, ydot, y, t):

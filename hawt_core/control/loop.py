@@ -306,12 +306,15 @@ class ClosedLoop:
         ``torque_override`` (an external command holds), ``tower_top_displacement`` (3,) [m]
         in the tower root frame t (t1 up, t2 lateral, t3 downwind; zeros on a rigid tower)
         and ``tower_top_acceleration`` (fore-aft, side-side) [m/s^2] over the last controller
-        step.  From the last record (the controller's measurements): no state changes."""
+        step; ``aerodynamic_force``, ``aerodynamic_moment``, ``aerodynamic_thrust``,
+        ``aerodynamic_torque``: :meth:`aero_loads`.  From the last record (the controller's
+        measurements) and the state: nothing changes."""
         m = self._measured
         if m is None:
             raise ValueError("rotor_state: nothing recorded yet")
-        top = np.zeros(3) if self._tower is None else \
-            np.array(self.sim.y[self._tower.u[-1]], float)
+        y = self.sim.y
+        top = np.zeros(3) if self._tower is None else np.array(y[self._tower.u[-1]], float)
+        F, M, thrust, torque = self.aero_loads()
         return {"time": m.time, "wind_speed": m.hub_wind,
                 "wind_direction": float(self.wind.direction),
                 "rotor_speed": m.rotor_speed, "generator_speed": m.generator_speed,
@@ -322,7 +325,25 @@ class ClosedLoop:
                 "pitch_override": self.override["pitch"] is not None,
                 "torque_override": self.override["torque"] is not None,
                 "tower_top_displacement": top,
-                "tower_top_acceleration": tuple(m.tower_top_acceleration)}
+                "tower_top_acceleration": tuple(m.tower_top_acceleration),
+                "aerodynamic_force": F, "aerodynamic_moment": M,
+                "aerodynamic_thrust": thrust, "aerodynamic_torque": torque}
+
+    def aero_loads(self):
+        """The aerodynamic loads now: per blade (force, moment) (Nb, 3) integrated along the
+        span in its root frame b [N, N m about the root point] (TurbineModel.aero_loads),
+        and the rotor's thrust along the shaft axis s3 [N] and torque about it through the
+        hub centre [N m]."""
+        m, y, t = self.model, self.sim.y, self.sim.t
+        F, M = m.aero_loads(y, t)
+        q = y[:m.nq]
+        tower = m.tower_top(np.zeros_like(y), y)
+        fr = m.rigid.frames(q, t, tower)
+        B, s3 = fr["B"], fr["S"][:, 2]
+        P = m.rigid.root_points(q, t, tower) - m.rigid.teeter_point(fr)[None, :]
+        FN, MN = np.einsum("kij,kj->ki", B, F), np.einsum("kij,kj->ki", B, M)
+        torque = float(np.sum((np.cross(P, FN) + MN) @ s3))
+        return F, M, float(np.sum(FN @ s3)), torque
 
     def last(self) -> dict:
         """The last history row by column name."""

@@ -102,11 +102,18 @@ class StatePublisher:
             torque_override=bool(r["torque_override"]), controller=self.settings.controller,
             tower_top_displacement=Vector3(x=float(top[0]), y=float(top[1]), z=float(top[2])),
             tower_top_acceleration_fore_aft=float(fa),
-            tower_top_acceleration_side_side=float(ss))
+            tower_top_acceleration_side_side=float(ss),
+            aerodynamic_force=[Vector3(x=a, y=b, z=c) for a, b, c in
+                               np.asarray(r["aerodynamic_force"], float).tolist()],
+            aerodynamic_moment=[Vector3(x=a, y=b, z=c) for a, b, c in
+                                np.asarray(r["aerodynamic_moment"], float).tolist()],
+            aerodynamic_thrust=float(r["aerodynamic_thrust"]),
+            aerodynamic_torque=float(r["aerodynamic_torque"]))
         values = [msg.wind_speed, msg.wind_direction, msg.rotor_speed, msg.generator_speed,
                   msg.generator_torque, msg.mechanical_power, msg.electrical_power, *msg.pitch,
-                  *msg.root_out_of_plane_moment, *top, fa, ss]
-        if not _finite(values):
+                  *msg.root_out_of_plane_moment, *top, fa, ss, msg.aerodynamic_thrust,
+                  msg.aerodynamic_torque]
+        if not _finite(values, r["aerodynamic_force"], r["aerodynamic_moment"]):
             raise ValueError("non-finite rotor state")
         return msg
 
