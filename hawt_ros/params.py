@@ -71,11 +71,12 @@ PARAMETERS: Dict[str, Tuple[Any, str]] = {
     "perturb": ("", "initial perturbation, e.g. 'teeter=0.02,yaw_rate=0.01' "
                     f"(names: {', '.join(PERTURB_NAMES)})"),
     "marker_frame": ("nacelle", "frame of the blade markers: 'nacelle' or 'hub'"),
-    "wind": (DEFAULT_WIND, "steady wind at hub height [m/s]: the turbine operates in it "
-                           "under `controller` (it needs an aerodynamics section and a "
-                           "drivetrain, e.g. turbine:=nrel5mw); 0 = in a vacuum (the "
-                           "paper's model); left at its default, a turbine without "
-                           "aerodynamics (the paper's) runs in a vacuum"),
+    "wind": (DEFAULT_WIND, "wind at hub height: a steady speed [m/s], or a time series "
+                           "'t0:U0,t1:U1,...' [s:m/s] (e.g. '0:15,10:15,10.5:17', a step at "
+                           "10 s); the turbine operates in it under `controller` (it needs "
+                           "an aerodynamics section and a drivetrain, e.g. turbine:=nrel5mw); "
+                           "0 = in a vacuum (the paper's model); left at its default, a "
+                           "turbine without aerodynamics (the paper's) runs in a vacuum"),
     "controller": ("rosco", "with wind > 0: 'rosco' (the rosco wheel's DISCON.IN for the "
                             "turbine), 'builtin' (hawt's baseline controller on that schedule) "
                             "or a DISCON.IN path"),
@@ -100,6 +101,9 @@ class NodeSettings:
     marker_frame: str = "nacelle"
     wind: float = DEFAULT_WIND
     controller: str = "rosco"
+    #: the wind as a time series ((t [s], U [m/s]), ...), () = steady at ``wind``; ``wind``
+    #: is then its speed at t = 0
+    wind_series: Tuple[Tuple[float, float], ...] = ()
     override_timeout: float = 1.0
 
     def replace(self, **kw) -> "NodeSettings":
@@ -137,7 +141,8 @@ _RANGES = {
     "publish_rate": (0.0, False, 1000.0, "need a finite number > 0 and <= 1000 [Hz]"),
     "real_time_factor": (0.0, True, 1000.0, "need a finite number >= 0 and <= 1000 "
                          "(1 = wall clock, 0 = as fast as possible)"),
-    "wind": (0.0, True, 100.0, "need a finite number >= 0 and <= 100 [m/s] (0 = in a vacuum)"),
+    "wind": (0.0, True, 100.0, "need a finite number >= 0 and <= 100 [m/s] (0 = in a vacuum), "
+             "or a time series 't0:U0,t1:U1,...' [s:m/s]"),
     "override_timeout": (0.0, False, 3600.0, "need a finite number > 0 and <= 3600 [s]"),
 }
 
@@ -163,6 +168,12 @@ def validate_parameter(name: str, value: Any) -> Any:
             return check_step_deg(value)
         except ValueError:
             raise ParameterError(name, value, STEP_DEG_ALLOWED) from None
+    if name == "wind" and isinstance(value, str):
+        from hawt_core.aero.wind import parse_wind_series
+        try:
+            return parse_wind_series(value.strip(), name)
+        except ValueError as exc:
+            raise ParameterError(name, value, str(exc).split("; ", 1)[-1]) from None
     if name in _RANGES:
         low, closed, high, allowed = _RANGES[name]
         x = _number(name, value, allowed)
@@ -194,6 +205,9 @@ def settings_from_parameters(values: Mapping[str, Any]) -> NodeSettings:
     kw = {}
     for name, (default, _doc) in PARAMETERS.items():
         kw[name] = validate_parameter(name, values.get(name, default))
+    if isinstance(kw["wind"], tuple):           # a time series: its speed at t = 0 too
+        kw["wind_series"] = kw["wind"]
+        kw["wind"] = kw["wind"][0][1]
     return NodeSettings(**kw)
 
 

@@ -265,11 +265,21 @@ def test_parameter_validation_messages():
                                ("publish_rate", float("nan"), ["publish_rate", "nan"]),
                                ("real_time_factor", -2, ["real_time_factor", "-2", ">= 0"]),
                                ("perturb", "bogus=1", ["perturb", "bogus", "teeter"]),
-                               ("marker_frame", "map", ["marker_frame", "nacelle", "hub"])]:
+                               ("marker_frame", "map", ["marker_frame", "nacelle", "hub"]),
+                               ("wind", "0:15,0:17", ["wind", "'0:15,0:17'", "increase",
+                                                      "t0:U0,t1:U1"]),
+                               ("wind", "0:15,10:900", ["wind", "0.1 to 100 m/s"]),
+                               ("wind", "gusty", ["wind", "'gusty'", "time:speed"])]:
         with pytest.raises(ParameterError) as ei:
             validate_parameter(name, value)
         for w in words:
             assert w in str(ei.value), (w, str(ei.value))
+    # the wind as a time series: its speed at t = 0 starts the turbine, the series follows
+    from hawt_ros.params import settings_from_parameters
+    s = settings_from_parameters({"wind": " 0:15, 10:15, 10.5:17"})
+    assert s.wind == 15.0 and s.wind_series == ((0.0, 15.0), (10.0, 15.0), (10.5, 17.0))
+    s = settings_from_parameters({"wind": 12})
+    assert s.wind == 12.0 and s.wind_series == ()
     ok = validate_request(0.0, 0, 0, "", default_elements=4)
     assert (ok.elements, ok.rotor_speed, ok.steps, ok.method) == (4, None, None, "auto")
     for kw, field in [({"rotor_speed": -1.0}, "rotor_speed"),

@@ -68,6 +68,27 @@ def test_shear_history_and_direction():
         Wind(speed=1.0, history=((1.0, 1.0), (0.5, 1.0)))
 
 
+def test_a_wind_series_is_the_piecewise_linear_hub_speed():
+    """``"t0:U0,t1:U1,..."`` (the node's ``wind`` parameter): the hub speed is the linear
+    interpolation of the points (np.interp, constant beyond them; 1e-12), one plain speed a
+    steady wind; bad series are refused naming the field, the text and what is allowed."""
+    from hawt_core.aero.wind import parse_wind_series
+    points = parse_wind_series("0:15,10:15,10.5:17,30:12")
+    w = Wind.from_series(points, direction=0.1)
+    t = np.linspace(-1.0, 40.0, 411)
+    ts, us = zip(*points)
+    np.testing.assert_allclose(w.hub_speed(t), np.interp(t, ts, us), rtol=1e-12)
+    assert w.speed == 15.0 and w.direction == 0.1
+    steady = Wind.from_series(parse_wind_series("12.5"))
+    assert steady.history == () and steady.speed == 12.5
+    for text, words in [("0:15,5", ["wind", "'0:15,5'", "t0:U0"]),
+                        ("3:15,1:16", ["increase"]), ("0:0", ["0.1 to 100 m/s"]),
+                        ("0:nan", ["'0:nan'"])]:
+        with pytest.raises(ValueError) as ei:
+            parse_wind_series(text)
+        assert all(x in str(ei.value) for x in words), str(ei.value)
+
+
 def test_iec_extreme_operating_gust():
     """IEC 61400-1 ed. 3, class I-B, V_hub = 25 m/s, D = 126 m, z_hub = 90 m (the NREL 5-MW):
     by hand, V_e1 = 0.8 * 1.4 * 50 = 56, sigma1 = 0.14 (0.75 * 25 + 5.6) = 3.409,

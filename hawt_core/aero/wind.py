@@ -17,6 +17,7 @@ from typing import Optional, Tuple
 import numpy as np
 
 __all__ = ["Wind", "ExtremeOperatingGust", "IEC_REFERENCE_SPEED", "IEC_TURBULENCE",
+           "parse_wind_series", "WIND_SERIES_ALLOWED",
            "potential_flow_shadow"]
 
 #: IEC 61400-1 ed. 3, table 1: reference wind speed V_ref [m/s] by turbine class.
@@ -62,6 +63,41 @@ class ExtremeOperatingGust:
         inside = (tt >= 0.0) & (tt <= T)
         d = -0.37 * self.amplitude * np.sin(3 * np.pi * tt / T) * (1 - np.cos(2 * np.pi * tt / T))
         return np.where(inside, d, 0.0)
+
+
+#: what a wind time series may be (parse_wind_series's error messages)
+WIND_SERIES_ALLOWED = ("need a speed [m/s] or time:speed pairs 't0:U0,t1:U1,...' (times [s] "
+                       ">= 0, increasing; speeds 0.1 to 100 m/s; linear between the points, "
+                       "constant beyond them), e.g. '0:15,10:15,10.5:17' (15 m/s, then a "
+                       "step to 17 m/s at 10 s)")
+
+
+def parse_wind_series(text: str, name: str = "wind") -> tuple:
+    """``"0:15,10:15,10.5:17"`` -> ((0.0, 15.0), (10.0, 15.0), (10.5, 17.0)): the hub-height
+    wind speed [m/s] against time [s], piecewise linear (a plain speed ``"15"``: one
+    point).  ValueError naming ``name``, the text and what is allowed."""
+    def bad(why=""):
+        return ValueError(f"{name}: {text!r} is not allowed; {why}{WIND_SERIES_ALLOWED}")
+    if not isinstance(text, str) or not text.strip():
+        raise bad()
+    points = []
+    for part in text.split(","):
+        fields = part.split(":")
+        try:
+            values = [float(f) for f in fields]
+        except ValueError:
+            raise bad() from None
+        if len(values) == 1 and not points and len(text.split(",")) == 1:
+            values = [0.0, values[0]]
+        if len(values) != 2 or not all(math.isfinite(v) for v in values):
+            raise bad()
+        points.append((values[0], values[1]))
+    times = [p[0] for p in points]
+    if times[0] < 0 or any(b <= a for a, b in zip(times, times[1:])):
+        raise bad("the times must be >= 0 and increase; ")
+    if not all(0.1 <= u <= 100.0 for _, u in points):
+        raise bad("a speed is outside 0.1 to 100 m/s; ")
+    return tuple(points)
 
 
 def potential_flow_shadow(x, y, radius):
@@ -110,6 +146,16 @@ class Wind:
         times = [p[0] for p in self.history]
         if any(b <= a for a, b in zip(times, times[1:])):
             raise ValueError("wind.history: the times must increase strictly")
+
+    @classmethod
+    def from_series(cls, points, **kwargs) -> "Wind":
+        """The wind whose hub-height speed follows ``points`` ((t, U), ...) [s, m/s]
+        (parse_wind_series), linear between them and constant beyond; ``kwargs``: the other
+        fields (direction, shear...)."""
+        points = tuple((float(a), float(b)) for a, b in points)
+        u0 = points[0][1]
+        history = tuple((a, b / u0) for a, b in points) if len(points) > 1 else ()
+        return cls(u0, history=history, **kwargs)
 
     def hub_speed(self, t):
         """The speed at the reference height at time t [s] (history and gust applied)."""

@@ -217,7 +217,8 @@ class HawtNode(Pacing, StatePublisher, Recording, AnalysisServer, Overrides, Nod
             f"and starting it under {name} ({s.elements or self.turbine.blade.elements} "
             "elements per blade; Ctrl-C stops)")
         try:
-            self.sim = closed_loop(self.turbine, Wind(float(s.wind)),
+            wind = Wind.from_series(s.wind_series) if s.wind_series else Wind(float(s.wind))
+            self.sim = closed_loop(self.turbine, wind,
                                    "builtin" if name == "builtin" else "rosco",
                                    discon=discon, elements=s.elements or None,
                                    step_deg=s.step_deg, record=False)
@@ -226,7 +227,10 @@ class HawtNode(Pacing, StatePublisher, Recording, AnalysisServer, Overrides, Nod
                 from None
         self.model = self.sim.model
         self.dt = self.sim.dt
-        self.sim_source = f"closed loop in {s.wind:g} m/s wind under {name} ({discon})"
+        series = "" if not s.wind_series else " (then " + ", ".join(
+            f"{u:g} m/s at {t:g} s" for t, u in s.wind_series[1:]) + ")"
+        self.sim_source = (f"closed loop in {s.wind:g} m/s wind{series} under {name} "
+                           f"({discon})")
         self._SimulationError = SimulationError
 
     def _warn_unknown_overrides(self) -> None:
