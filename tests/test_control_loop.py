@@ -310,3 +310,31 @@ def test_fine_pitch_above_rated_speeds_the_rotor_up_on_the_flexible_tower():
         assert slope > 0.3 and rpm[-1] > 13.5, (slope, rpm[-5:])
     finally:
         loop.close()
+
+
+def test_simulate_follows_a_wind_series(tmp_path, capfd):
+    """`hawt simulate nrel5mw --wind-series 0:15,1:15,1.5:17 --controller rosco`: the CSV's
+    wind_speed is the series' linear interpolation at every recorded time (1e-9: it is the
+    hub speed the controller reads), the rotor starts at the operating point of 15 m/s
+    (12.1 rpm within 1 %, DISCON.IN's rated speed) and ROSCO pitches to feather after the
+    step (> 1 deg more at 3 s); a bad series or one with --wind is refused naming the flag."""
+    out = tmp_path / "series.csv"
+    assert main(["simulate", "nrel5mw", "--wind-series", "0:15,1:15,1.5:17", "--controller",
+                 "rosco", "--duration", "3", "-n", "4", "-q", "-o", str(out)]) == 0
+    capfd.readouterr()
+    with open(out) as f:
+        rows = list(csv.DictReader(f))
+    t = np.array([float(r["time"]) for r in rows])
+    U = np.array([float(r["wind_speed"]) for r in rows])
+    np.testing.assert_allclose(U, np.interp(t, [0, 1, 1.5], [15, 15, 17]), rtol=1e-9)
+    rpm = float(rows[0]["rotor_speed_rpm"])
+    assert abs(rpm - 12.1) < 0.01 * 12.1
+    pitch = np.array([float(r["pitch1_deg"]) for r in rows])
+    assert pitch[-1] > pitch[t <= 1.0][-1] + 1.0
+    for argv, words in [(["--wind-series", "0:15,0:17"], ["--wind-series", "increase"]),
+                        (["--wind-series", "0:15", "--wind", "15"], ["--wind-series",
+                                                                     "instead of --wind"])]:
+        assert main(["simulate", "nrel5mw", *argv, "--controller", "rosco",
+                     "--duration", "1"]) == 2
+        err = capfd.readouterr().err
+        assert all(w in err for w in words), err
