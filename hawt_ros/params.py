@@ -73,7 +73,7 @@ PARAMETERS: Dict[str, Tuple[Any, str]] = {
     "marker_frame": ("nacelle", "frame of the blade markers: 'nacelle' or 'hub'"),
     "wind": (DEFAULT_WIND, "wind at hub height: a steady speed [m/s], or a time series "
                            "'t0:U0,t1:U1,...' [s:m/s] (e.g. '0:15,10:15,10.5:17', a step at "
-                           "10 s); the turbine operates in it under `controller` (it needs "
+                           "10 s; 'eog@T' adds the IEC extreme operating gust); the turbine operates in it under `controller` (it needs "
                            "an aerodynamics section and a drivetrain, e.g. turbine:=nrel5mw); "
                            "0 = in a vacuum (the paper's model); left at its default, a "
                            "turbine without aerodynamics (the paper's) runs in a vacuum"),
@@ -101,9 +101,9 @@ class NodeSettings:
     marker_frame: str = "nacelle"
     wind: float = DEFAULT_WIND
     controller: str = "rosco"
-    #: the wind as a time series ((t [s], U [m/s]), ...), () = steady at ``wind``; ``wind``
-    #: is then its speed at t = 0
-    wind_series: Tuple[Tuple[float, float], ...] = ()
+    #: the wind as a time series (hawt_core.aero.wind.WindSeries), None = steady at
+    #: ``wind``; ``wind`` is then its speed at t = 0
+    wind_series: Any = None
     override_timeout: float = 1.0
 
     def replace(self, **kw) -> "NodeSettings":
@@ -205,9 +205,9 @@ def settings_from_parameters(values: Mapping[str, Any]) -> NodeSettings:
     kw = {}
     for name, (default, _doc) in PARAMETERS.items():
         kw[name] = validate_parameter(name, values.get(name, default))
-    if isinstance(kw["wind"], tuple):           # a time series: its speed at t = 0 too
+    if not isinstance(kw["wind"], float):       # a time series: its speed at t = 0 too
         kw["wind_series"] = kw["wind"]
-        kw["wind"] = kw["wind"][0][1]
+        kw["wind"] = kw["wind"].initial_speed
     return NodeSettings(**kw)
 
 

@@ -277,9 +277,11 @@ def test_parameter_validation_messages():
     # the wind as a time series: its speed at t = 0 starts the turbine, the series follows
     from hawt_ros.params import settings_from_parameters
     s = settings_from_parameters({"wind": " 0:15, 10:15, 10.5:17"})
-    assert s.wind == 15.0 and s.wind_series == ((0.0, 15.0), (10.0, 15.0), (10.5, 17.0))
+    assert s.wind == 15.0 and s.wind_series.points == ((0.0, 15.0), (10.0, 15.0), (10.5, 17.0))
+    assert s.wind_series.gust_start is None
+    assert settings_from_parameters({"wind": "11,eog@20"}).wind_series.gust_start == 20.0
     s = settings_from_parameters({"wind": 12})
-    assert s.wind == 12.0 and s.wind_series == ()
+    assert s.wind == 12.0 and not s.wind_series
     ok = validate_request(0.0, 0, 0, "", default_elements=4)
     assert (ok.elements, ok.rotor_speed, ok.steps, ok.method) == (4, None, None, "auto")
     for kw, field in [({"rotor_speed": -1.0}, "rotor_speed"),

@@ -73,20 +73,48 @@ def test_a_wind_series_is_the_piecewise_linear_hub_speed():
     interpolation of the points (np.interp, constant beyond them; 1e-12), one plain speed a
     steady wind; bad series are refused naming the field, the text and what is allowed."""
     from hawt_core.aero.wind import parse_wind_series
-    points = parse_wind_series("0:15,10:15,10.5:17,30:12")
+    series = parse_wind_series("0:15,10:15,10.5:17,30:12")
+    points = series.points
+    assert series.gust_start is None and series.initial_speed == 15.0
     w = Wind.from_series(points, direction=0.1)
     t = np.linspace(-1.0, 40.0, 411)
     ts, us = zip(*points)
     np.testing.assert_allclose(w.hub_speed(t), np.interp(t, ts, us), rtol=1e-12)
     assert w.speed == 15.0 and w.direction == 0.1
-    steady = Wind.from_series(parse_wind_series("12.5"))
+    steady = Wind.from_series(parse_wind_series("12.5").points)
     assert steady.history == () and steady.speed == 12.5
     for text, words in [("0:15,5", ["wind", "'0:15,5'", "t0:U0"]),
                         ("3:15,1:16", ["increase"]), ("0:0", ["0.1 to 100 m/s"]),
-                        ("0:nan", ["'0:nan'"])]:
+                        ("0:nan", ["'0:nan'"]), ("11,eog@-1", ["gust's start"]),
+                        ("11,eog@1,eog@2", ["one gust"]), ("eog@3", ["'eog@3'"])]:
         with pytest.raises(ValueError) as ei:
             parse_wind_series(text)
         assert all(x in str(ei.value) for x in words), str(ei.value)
+
+
+def test_a_wind_series_with_the_extreme_operating_gust_on_the_nrel5mw():
+    """``"11,eog@20"`` on the NREL 5-MW: 11 m/s plus the IEC 61400-1 ed. 3 extreme operating
+    gust from 20 s, class I, turbulence B, its amplitude written out here from the standard
+    (V_e1 = 0.8 x 1.4 x 50 m/s, sigma1 = 0.14 (0.75 V_hub + 5.6), Lambda1 = 42 m above 60 m;
+    D = 2 (1.5 + 61.5 cos 2.5 deg) m, hub at 87.6 + 2.4 m): 4.92 m/s (1e-12), the hub speed
+    its dip-rise-dip (1e-12) and 11 m/s outside it."""
+    import warnings
+    from hawt_core.aero.wind import parse_wind_series
+    from hawt_core.io.catalog import load_any
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        turbine = load_any("nrel5mw")
+    w = parse_wind_series("11,eog@20").for_turbine(turbine)
+    D = 2 * (1.5 + 61.5 * math.cos(math.radians(2.5)))
+    sigma1 = 0.14 * (0.75 * 11.0 + 5.6)
+    amplitude = min(1.35 * (0.8 * 1.4 * 50.0 - 11.0), 3.3 * sigma1 / (1 + 0.1 * D / 42.0))
+    assert w.gust.amplitude == pytest.approx(amplitude, rel=1e-12)
+    assert amplitude == pytest.approx(4.92, abs=0.01)
+    t = np.linspace(15.0, 35.0, 201)
+    tt = t - 20.0
+    inside = (tt >= 0) & (tt <= 10.5)
+    dv = -0.37 * amplitude * np.sin(3 * np.pi * tt / 10.5) * (1 - np.cos(2 * np.pi * tt / 10.5))
+    np.testing.assert_allclose(w.hub_speed(t), 11.0 + np.where(inside, dv, 0.0), rtol=1e-12)
 
 
 def test_iec_extreme_operating_gust():

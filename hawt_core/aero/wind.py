@@ -11,13 +11,13 @@ arrays (complex-step safe in the positions).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Optional, Tuple
 
 import numpy as np
 
 __all__ = ["Wind", "ExtremeOperatingGust", "IEC_REFERENCE_SPEED", "IEC_TURBULENCE",
-           "parse_wind_series", "WIND_SERIES_ALLOWED",
+           "parse_wind_series", "WindSeries", "WIND_SERIES_ALLOWED",
            "potential_flow_shadow"]
 
 #: IEC 61400-1 ed. 3, table 1: reference wind speed V_ref [m/s] by turbine class.
@@ -69,25 +69,77 @@ class ExtremeOperatingGust:
 WIND_SERIES_ALLOWED = ("need a speed [m/s] or time:speed pairs 't0:U0,t1:U1,...' (times [s] "
                        ">= 0, increasing; speeds 0.1 to 100 m/s; linear between the points, "
                        "constant beyond them), e.g. '0:15,10:15,10.5:17' (15 m/s, then a "
-                       "step to 17 m/s at 10 s)")
+                       "step to 17 m/s at 10 s), and optionally 'eog@T' (the IEC extreme "
+                       "operating gust, class I, turbulence B, starting at T [s])")
 
 
-def parse_wind_series(text: str, name: str = "wind") -> tuple:
-    """``"0:15,10:15,10.5:17"`` -> ((0.0, 15.0), (10.0, 15.0), (10.5, 17.0)): the hub-height
-    wind speed [m/s] against time [s], piecewise linear (a plain speed ``"15"``: one
-    point).  ValueError naming ``name``, the text and what is allowed."""
+@dataclass(frozen=True)
+class WindSeries:
+    """A wind history as text gives it (parse_wind_series): ``points`` ((t [s], U [m/s]),
+    ...) of the hub-height speed, linear between them and constant beyond; ``gust_start``
+    [s]: the IEC extreme operating gust (class I, turbulence B) added from then, or None."""
+    points: Tuple[Tuple[float, float], ...]
+    gust_start: Optional[float] = None
+
+    @property
+    def initial_speed(self) -> float:
+        """The hub speed at t = 0 [m/s] (before the gust)."""
+        return self.points[0][1]
+
+    def wind(self, rotor_diameter: float, hub_height: float, **kwargs) -> "Wind":
+        """The Wind (``kwargs``: its other fields); the gust's amplitude from the speed at
+        its start and the rotor's diameter and hub height [m] (IEC 61400-1 ed. 3)."""
+        w = Wind.from_series(self.points, **kwargs)
+        if self.gust_start is None:
+            return w
+        u = float(w.hub_speed(self.gust_start))
+        return replace(w, gust=ExtremeOperatingGust.iec(u, rotor_diameter, hub_height,
+                                                         start=self.gust_start))
+
+
+    def for_turbine(self, turbine, **kwargs) -> "Wind":
+        """:meth:`wind` with the rotor diameter (tip radius in the rotor plane, precone
+        included) and hub height (tower plus shaft height; without a tower the Wind's
+        reference height) of ``turbine`` (model.Turbine)."""
+        radius = turbine.hub.radius + turbine.blade.length * math.cos(turbine.rotor.precone)
+        height = (turbine.tower.length + turbine.nacelle.shaft_height
+                  if turbine.tower is not None else
+                  kwargs.get("reference_height", Wind.__dataclass_fields__[
+                      "reference_height"].default))
+        return self.wind(2.0 * radius, float(height), **kwargs)
+
+
+def parse_wind_series(text: str, name: str = "wind") -> WindSeries:
+    """``"0:15,10:15,10.5:17"`` -> WindSeries(((0.0, 15.0), (10.0, 15.0), (10.5, 17.0))):
+    the hub-height wind speed [m/s] against time [s], piecewise linear (a plain speed
+    ``"15"``: one point); a token ``eog@T`` adds the IEC extreme operating gust from T [s].
+    ValueError naming ``name``, the text and what is allowed."""
     def bad(why=""):
         return ValueError(f"{name}: {text!r} is not allowed; {why}{WIND_SERIES_ALLOWED}")
     if not isinstance(text, str) or not text.strip():
         raise bad()
-    points = []
-    for part in text.split(","):
-        fields = part.split(":")
+    parts = [p.strip() for p in text.split(",")]
+    gusts = [p for p in parts if p.lower().startswith("eog@")]
+    parts = [p for p in parts if not p.lower().startswith("eog@")]
+    gust = None
+    if len(gusts) > 1:
+        raise bad("one gust at most; ")
+    if gusts:
         try:
-            values = [float(f) for f in fields]
+            gust = float(gusts[0][4:])
         except ValueError:
             raise bad() from None
-        if len(values) == 1 and not points and len(text.split(",")) == 1:
+        if not (math.isfinite(gust) and gust >= 0):
+            raise bad("the gust's start must be a time >= 0 [s]; ")
+    if not parts:
+        raise bad()
+    points = []
+    for part in parts:
+        try:
+            values = [float(f) for f in part.split(":")]
+        except ValueError:
+            raise bad() from None
+        if len(values) == 1 and len(parts) == 1:
             values = [0.0, values[0]]
         if len(values) != 2 or not all(math.isfinite(v) for v in values):
             raise bad()
@@ -97,7 +149,7 @@ def parse_wind_series(text: str, name: str = "wind") -> tuple:
         raise bad("the times must be >= 0 and increase; ")
     if not all(0.1 <= u <= 100.0 for _, u in points):
         raise bad("a speed is outside 0.1 to 100 m/s; ")
-    return tuple(points)
+    return WindSeries(tuple(points), gust)
 
 
 def potential_flow_shadow(x, y, radius):

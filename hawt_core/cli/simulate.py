@@ -30,7 +30,7 @@ def cmd_simulate(args) -> int:
             raise ValueError("--wind-series: give it instead of --wind (its speed at t = 0 "
                              "sets the operating point)")
         series = parse_wind_series(args.wind_series, "--wind-series")
-        args.wind = series[0][1]
+        args.wind = series.initial_speed
     from .aero import check_wind_args, schedule_given, turbine_in_wind
     check_wind_args(args)
     if args.wind is None and schedule_given(args):
@@ -43,9 +43,10 @@ def cmd_simulate(args) -> int:
     wind = None
     if args.wind is not None:
         turbine, wind, _ = turbine_in_wind(args, turbine)
-        if series is not None and len(series) > 1:
+        if series is not None:
             from dataclasses import replace
-            wind = replace(wind, history=tuple((t, u / series[0][1]) for t, u in series))
+            w = series.for_turbine(turbine)
+            wind = replace(wind, history=w.history, gust=w.gust)
     loop = args.controller is not None and args.controller != "none"
     if args.plot and (not loop or not args.plot.lower().endswith(".png")):
         raise ValueError(f"--plot: {args.plot!r} is not allowed; need a .png file, with "
@@ -147,8 +148,9 @@ def _simulate_args(p):
     p.add_argument("--wind-series", default=None, metavar="T0:U0,T1:U1,...",
                    help="instead of --wind: the hub-height wind speed [m/s] against time "
                         "[s], linear between the points, constant beyond (e.g. "
-                        "0:15,10:15,10.5:17, a step at 10 s); the operating point is that "
-                        "of its speed at t = 0")
+                        "0:15,10:15,10.5:17, a step at 10 s; eog@T adds the IEC extreme "
+                        "operating gust from T); the operating point is that of its speed "
+                        "at t = 0")
     p.add_argument("--rotor-speed", type=rotor_speed_type, default=None, metavar="RAD_PER_S",
                    help="rotor speed [rad/s] (default: the file's; with --wind the "
                         "schedule's)")

@@ -28,7 +28,9 @@ class Recording:
                     "publish_rate": s.publish_rate, "real_time_factor": s.real_time_factor,
                     "perturb": dict(s.perturb), "marker_frame": s.marker_frame,
                     "simulation": self.sim_source, "wind": s.wind,
-                    "wind_series": [list(p) for p in s.wind_series],
+                    "wind_series": None if not s.wind_series else {
+                        "points": [list(p) for p in s.wind_series.points],
+                        "gust_start": s.wind_series.gust_start},
                     "controller": s.controller if s.wind > 0 else None}
         self._name_crashed_recordings(p.parent)
         self.recorder = BagWriter(p, turbine_yaml=turbine_yaml, settings=settings)

@@ -217,7 +217,8 @@ class HawtNode(Pacing, StatePublisher, Recording, AnalysisServer, Overrides, Nod
             f"and starting it under {name} ({s.elements or self.turbine.blade.elements} "
             "elements per blade; Ctrl-C stops)")
         try:
-            wind = Wind.from_series(s.wind_series) if s.wind_series else Wind(float(s.wind))
+            wind = s.wind_series.for_turbine(self.turbine) if s.wind_series else \
+                Wind(float(s.wind))
             self.sim = closed_loop(self.turbine, wind,
                                    "builtin" if name == "builtin" else "rosco",
                                    discon=discon, elements=s.elements or None,
@@ -227,8 +228,12 @@ class HawtNode(Pacing, StatePublisher, Recording, AnalysisServer, Overrides, Nod
                 from None
         self.model = self.sim.model
         self.dt = self.sim.dt
-        series = "" if not s.wind_series else " (then " + ", ".join(
-            f"{u:g} m/s at {t:g} s" for t, u in s.wind_series[1:]) + ")"
+        later = [] if not s.wind_series else [
+            f"{u:g} m/s at {t:g} s" for t, u in s.wind_series.points[1:]]
+        if s.wind_series and s.wind_series.gust_start is not None:
+            later.append(f"an extreme operating gust of {wind.gust.amplitude:.3g} m/s at "
+                         f"{s.wind_series.gust_start:g} s")
+        series = f" (then {', '.join(later)})" if later else ""
         self.sim_source = (f"closed loop in {s.wind:g} m/s wind{series} under {name} "
                            f"({discon})")
         self._SimulationError = SimulationError
