@@ -102,7 +102,8 @@ def test_dynamic_states_settle_on_the_bem_steady_state():
     yb = np.stack([y[lay.blade_offset(k):lay.blade_offset(k) + model.blade_size]
                    for k in range(3)])
     model._blade_residual(np.zeros_like(yb), yb, v, w, None,
-                          model._air_flat(model._air(q, 0.0), 3), out)
+                          model._air_flat(model._air(q, y[model.nq:model.nq + model.nu], 0.0), 3),
+                          out)
     for k in range(3):
         for s in ("alpha_lag1", "alpha_lag2"):
             assert np.abs(y[lay.aero_states_of(k, s)] - out["alpha"][..., k]).max() < 1e-12
@@ -301,3 +302,37 @@ def test_commands_take_the_aerodynamic_model_and_refuse_it_without_wind(tmp_path
                 or "--airfoil: only used with --wind" in err), err
     assert cli.main(["modes", str(f), "--wind", "6", "--inflow", "pitt-peters"]) != 0
     assert "--inflow: invalid choice: 'pitt-peters'" in capsys.readouterr().err
+
+
+def test_dynamic_inflow_follows_the_actual_rotor_speed():
+    """Reference: invariance.  The same physical state written two ways: the NREL 5-MW
+    (axisymmetric, free generator, Oye's inflow) at nominal speed Omega0 with the generator
+    turning 8 % faster (generator_rate = 0.08 Omega0), and the same turbine at nominal speed
+    1.08 Omega0 with generator_rate 0 (the initial BEM state's blades and inductions in
+    both): the blades' unknowns and inductions identical, so the
+    aerodynamic loads (the swirl a' Omega r and the quasi-steady inductions use the rotor's
+    actual speed, rigid.rotor_spin) and the inflow rows agree to 1e-12 of their size; the
+    swirl at the nominal speed would differ by 5e-4 (checked: it fails)."""
+    from hawt_core.control.loop import free_generator
+    t = free_generator(axisymmetric(nrel5mw()))
+    w0 = t.rotor.speed
+    A = TurbineModel(t, elements=4, wind=Wind(8.0), inflow="oye")
+    B = TurbineModel(replace(t, rotor=replace(t.rotor, speed=1.08 * w0)), elements=4,
+                     wind=Wind(8.0), inflow="oye")
+    y = A.initial_guess()                   # the BEM state: blades deflected, inductions
+    lay = A.layout
+    assert np.abs(y[lay.aero_states_of(0, "a_tangential")]).max() > 1e-3
+    ya, yb = y.copy(), y.copy()
+    ya[lay["generator_rate"]] = 0.08 * w0
+    yb[lay["generator_rate"]] = 0.0
+    nq, nr = A.nq, A.nq + A.nu
+    assert A.rigid.rotor_spin(ya[:nq], ya[nq:nr], 0.0) == pytest.approx(1.08 * w0, rel=1e-14)
+    Fa, Ma = A.aero_loads(ya, 0.0)
+    Fb, Mb = B.aero_loads(yb, 0.0)
+    assert np.abs(Fa - Fb).max() <= 1e-12 * np.abs(Fa).max()
+    assert np.abs(Ma - Mb).max() <= 1e-12 * np.abs(Ma).max()
+    rows = np.concatenate([lay.aero_states_of(k, s).ravel() for k in range(3)
+                           for s in A.aero.state_names])
+    ra = A.residual(np.zeros(A.n), ya, 0.0)[rows]
+    rb = B.residual(np.zeros(B.n), yb, 0.0)[rows]
+    assert np.abs(ra - rb).max() <= 1e-12 * max(np.abs(ra).max(), 1.0)

@@ -241,11 +241,14 @@ class RotorAerodynamics:
                 wind, s3, t = (st.to_section(vec[..., j, :]) for j in range(3))
             if self.inflow == "oye":
                 a, ap = X[0], X[1]
+                # the rotor's actual speed (the root data's, per blade), else the nominal one
+                spin = air.get("spin")
+                omega = self.omega if spin is None else spin
                 # the free wind along the shaft at the element (AeroDyn's disk-normal speed):
                 # the axial induced velocity's and the momentum balance's speed
                 normal = np.sum(wind * s3, axis=-1)
                 axial = (a * normal)[..., None]
-                swirl = (ap * self.omega * self.r)[..., None]
+                swirl = (ap * omega * self.r)[..., None]
             else:
                 axial, swirl = self._axial, self._swirl
             W = wind - axial * s3 - swirl * t - st.to_section(sec["V"])
@@ -269,7 +272,7 @@ class RotorAerodynamics:
                 sphi = inflow_sine(W, s3, t)
                 F = prandtl_loss(self.blades, self.r, self.tip_r, self.hub_r, sphi)
                 qs = quasi_steady_inductions(self.blades, thrust, drive, a, F, self.r,
-                                             self.rho, normal, self.omega, self.cos_cone)
+                                             self.rho, normal, omega, self.cos_cone)
                 (za, Wa), (zt, Wt) = (oye_residuals(X[2 + j], X[j], Xd[2 + j], Xd[j], qs[j],
                                                     self.tau1, self.tau2) for j in range(2))
                 rows += [Wa, Wt, za, zt]            # the unknowns' order: a, a', z_a, z_t

@@ -38,7 +38,7 @@ __all__ = ["TurbineModel"]
 
 
 #: Trailing dimensions of each entry of the blades' root data (RotorAerodynamics.root_data).
-_AIR_TAIL = {"vectors": 2, "B": 2, "P": 1, "time": 0}
+_AIR_TAIL = {"vectors": 2, "B": 2, "P": 1, "time": 0, "spin": 0}
 
 #: Residual between the collocation times of a periodic steady state, relative to the load
 #: scale, that its harmonics must reach (solvers/periodic.py): in a vacuum, and in wind (the
@@ -162,15 +162,21 @@ class TurbineModel:
         return np.stack([y[..., self._tip_theta], y[..., self._tip_V], y[..., self._tip_Om],
                          ydot[..., self._tip_V], ydot[..., self._tip_Om]], -2)
 
-    def _air(self, q, t, tower=None):
-        """What the blades' aerodynamic loads need from the rigid coordinates q (..., nq) at
-        times t (...) and the tower-top state (FrozenWakeRotor.root_data: arrays with
-        leading dimensions (..., Nb)); None in a vacuum."""
+    def _air(self, q, u, t, tower=None):
+        """What the blades' aerodynamic loads need from the rigid coordinates q (..., nq) and
+        speeds u (..., nu) at times t (...) and the tower-top state (RotorAerodynamics.root_data:
+        arrays with leading dimensions (..., Nb); with dynamic inflow also ``spin``, the
+        rotor's actual speed, rigid.rotor_spin); None in a vacuum."""
         if self.aero is None:
             return None
         fr = self.rigid.frames(q, t, tower)
         P = self.rigid.root_points(q, t, tower) if self.aero.field else None
-        return self.aero.root_data(fr["B"], fr["S"], P, t)
+        air = self.aero.root_data(fr["B"], fr["S"], P, t)
+        if self.aero.inflow == "oye":
+            spin = self.rigid.rotor_spin(q, u, t, tower)
+            air["spin"] = np.broadcast_to(np.asarray(spin)[..., None],
+                                          fr["B"].shape[:-2]).copy()
+        return air
 
     @staticmethod
     def _air_flat(air, rows):
@@ -260,7 +266,7 @@ class TurbineModel:
         yb = y[:, nr:].reshape(K, nb, nbl)
         v, w = self.rigid.root_motion(q, u, t)                            # (K, nb, 3)
         g = self.rigid.gravity_in_root(q, t).reshape(K * nb, 3) if self.gravity else None
-        air = self._air(q, t)
+        air = self._air(q, u, t)
         rb = self._blade_residual(ydot[:, nr:].reshape(K * nb, nbl), yb.reshape(K * nb, nbl),
                                   v.reshape(K * nb, 3), w.reshape(K * nb, 3), g,
                                   self._air_flat(air, K * nb))
@@ -285,7 +291,7 @@ class TurbineModel:
         g = self.rigid.gravity_in_root(q, t, tw).reshape(K * nb, 3) if self.gravity else None
         rb = self._blade_residual(ydb.reshape(K * nb, nbl), yb.reshape(K * nb, nbl),
                                   v.reshape(K * nb, 3), w.reshape(K * nb, 3), g,
-                                  self._air_flat(self._air(q, t, tw), K * nb))
+                                  self._air_flat(self._air(q, u, t, tw), K * nb))
         rk = self.rigid.kinematics(q, qd, u, t)
         gf = self.rigid.generalized_forces(q, u, ud, t, yb[:, :, 0:3], yb[:, :, 3:6], tw)
         rt = self._tower_residual(ydot[:, to:], y[:, to:], gf[:, nu:], K)
@@ -332,7 +338,7 @@ class TurbineModel:
         g = self.rigid.gravity_in_root(q, t) if self.gravity else None
         rows_y, cols_y, vals_y = [], [], []
         rows_d, cols_d, vals_d = [], [], []
-        self._blade_block_jacobians(v, w, g, self._air(q, t), yb, ydb,
+        self._blade_block_jacobians(v, w, g, self._air(q, u, t), yb, ydb,
                                     (rows_y, cols_y, vals_y), (rows_d, cols_d, vals_d))
         if nr:          # the rigid columns and the rigid rows (they vary with the azimuth)
             c = self.coupling_jacobians(ydot, y, t)
@@ -397,7 +403,8 @@ class TurbineModel:
         rows_y, cols_y, vals_y = [], [], []
         rows_d, cols_d, vals_d = [], [], []
         Jy_parts, Jd_parts = (rows_y, cols_y, vals_y), (rows_d, cols_d, vals_d)
-        self._blade_block_jacobians(v, w, g, self._air(q, t, tw), yb, ydb, Jy_parts, Jd_parts)
+        self._blade_block_jacobians(v, w, g, self._air(q, u, t, tw), yb, ydb, Jy_parts,
+                                    Jd_parts)
         gf = self.rigid.generalized_forces(q, u, ud, t, yb[:, 0:3], yb[:, 3:6], tw)
         tip = gf[nu:]
         self._block_jacobians(self._tower_jac,
@@ -418,7 +425,8 @@ class TurbineModel:
             if self.gravity else None
         r = self._blade_residual(np.tile(ydb, (nx, 1)), np.tile(yb, (nx, 1)).astype(complex),
                                  vx.reshape(nx * nb, 3), wx.reshape(nx * nb, 3), gx,
-                                 self._air_flat(self._air(x[:, :nq], tt, twx), nx * nb)).imag / h
+                                 self._air_flat(self._air(x[:, :nq], x[:, nq:nr], tt, twx),
+                                                nx * nb)).imag / h
         r = r.reshape(nx, nb * nbl)
         rr, cc = np.nonzero(r.T)
         rows_y.append(nr + rr), cols_y.append(xcols[cc]), vals_y.append(r.T[rr, cc])
@@ -480,7 +488,7 @@ class TurbineModel:
         v, w = self.rigid.root_motion(x[:, :nq], x[:, nq:], tt)
         g = self.rigid.gravity_in_root(x[:, :nq], tt).reshape(M * nr * nb, 3) \
             if self.gravity else None
-        air = self._air(x[:, :nq], tt)
+        air = self._air(x[:, :nq], x[:, nq:], tt)
         rb = self._blade_residual(np.tile(ydb, (M * nr, 1)),
                                   np.tile(yb, (M * nr, 1)).astype(complex),
                                   v.reshape(M * nr * nb, 3), w.reshape(M * nr * nb, 3), g,
@@ -557,7 +565,7 @@ class TurbineModel:
             yb = np.stack([y[off:off + self.blade_size] for off in offs])
             out = {}
             self._blade_residual(np.zeros_like(yb), yb, v, w, g,
-                                 self._air_flat(self._air(q, 0.0, tw), self.n_blades), out)
+                                 self._air_flat(self._air(q, u, 0.0, tw), self.n_blades), out)
             alpha = out["alpha"]                                        # (N, G, Nb)
         for k, off in enumerate(offs):
             y[off + self.beam.n:off + self.blade_size] = self.aero.initial_states(

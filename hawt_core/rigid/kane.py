@@ -521,6 +521,13 @@ class RigidSystem:
         w[..., 0] = w[..., 0] + turn[1]
         return w
 
+    def rotor_spin(self, q, u, t, tower=None):
+        """(...): the hub's angular velocity about the shaft axis s3 [rad/s], w_H . s3 (the
+        nominal speed plus the drivetrain's speeds, and what yaw and tower motion add about
+        s3): the speed whose tangential velocity the rotor's swirl scales with."""
+        k = self._kin_tower(q, u, t, tower) if self.flexible_tower else self._kin(q, u, t)
+        return _dot(k["w_H"], k["s3"])
+
     def root_points(self, q, t, tower=None):
         """(..., Nb, 3): the blade-root points P_k relative to the tower-top point TY [m],
         inertial components (a flexible tower's tip displacement not included: the caller
