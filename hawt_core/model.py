@@ -325,6 +325,12 @@ class Turbine:
     def with_elements(self, n: int) -> "Turbine":
         return replace(self, blade=replace(self.blade, elements=int(n)))
 
+    def distance_from_shaft(self, x) -> np.ndarray:
+        """Distance [m] from the shaft axis of the points at span ``x`` [m] of the undeformed
+        blade: the root point is at the hub radius e in the hub plane (rigid/kane.py) and the
+        coned blade axis b1 leaves it, so e + x cos(precone)."""
+        return self.hub.radius + np.asarray(x) * np.cos(self.rotor.precone)
+
 
 @dataclass(frozen=True, eq=False)
 class Wing:

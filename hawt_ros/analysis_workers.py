@@ -191,8 +191,6 @@ def _worker_main(conn, turbine, kwargs, cancel_event, node_pid) -> None:
                 rotor_speed=kw.pop("rotor_speed", None) or None, progress=progress,
                 cancel=cancel_event.is_set, **kw)
         else:
-            kwargs = {k: v for k, v in kwargs.items() if k not in ("wind_speed", "discon",
-                                                                    "wind_direction")}
             result = be.modal_analysis(turbine, progress=progress, cancel=cancel_event.is_set,
                                        **kwargs)
         plain = result_to_plain(result)

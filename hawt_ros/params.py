@@ -73,10 +73,11 @@ PARAMETERS: Dict[str, Tuple[Any, str]] = {
     "marker_frame": ("nacelle", "frame of the blade markers: 'nacelle' or 'hub'"),
     "wind": (DEFAULT_WIND, "wind at hub height: a steady speed [m/s], or a time series "
                            "'t0:U0,t1:U1,...' [s:m/s] (e.g. '0:15,10:15,10.5:17', a step at "
-                           "10 s; 'eog@T' adds the IEC extreme operating gust); the turbine operates in it under `controller` (it needs "
-                           "an aerodynamics section and a drivetrain, e.g. turbine:=nrel5mw); "
-                           "0 = in a vacuum (the paper's model); left at its default, a "
-                           "turbine without aerodynamics (the paper's) runs in a vacuum"),
+                           "10 s; 'eog@T' adds the IEC extreme operating gust); the turbine "
+                           "operates in it under `controller` (it needs an aerodynamics "
+                           "section and a drivetrain, e.g. turbine:=nrel5mw); 0 = in a "
+                           "vacuum (the paper's model); left at its default, a turbine "
+                           "without aerodynamics (the paper's) runs in a vacuum"),
     "controller": ("rosco", "with wind > 0: 'rosco' (the rosco wheel's DISCON.IN for the "
                             "turbine), 'builtin' (hawt's baseline controller on that schedule) "
                             "or a DISCON.IN path"),

@@ -289,8 +289,8 @@ def test_fine_pitch_above_rated_speeds_the_rotor_up_on_the_flexible_tower():
     """A pitch override to fine pitch (0 deg, clipped from -1 rad at PC_MinPit) in 15 m/s on
     the flexible tower: more aerodynamic torque than ROSCO's rated torque, so the rotor speeds
     up (the drivetrain's torsion rides on it): a least-squares slope > 0.3 rpm/s at fine
-    pitch and > 13.5 rpm after 3 s, from 12.1.  The Newton iteration converges all the way (regression: with unit scales for
-    the tower's section forces, ~3.5 MN for the tower-top weight alone (rotor 110 t and
+    pitch and > 13.5 rpm after 3 s, from 12.1.  The Newton iteration converges all the way
+    (regression: with unit scales for the tower's section forces, ~3.5 MN for the tower-top weight alone (rotor 110 t and
     nacelle 240 t, Jonkman et al. 2009 Table 1-1), Newton increments at their round-off were
     taken for divergence and the step failed at 13.4 rpm); the tower's force scales are at
     least that weight."""

@@ -96,12 +96,11 @@ class WindSeries:
         return replace(w, gust=ExtremeOperatingGust.iec(u, rotor_diameter, hub_height,
                                                          start=self.gust_start))
 
-
     def for_turbine(self, turbine, **kwargs) -> "Wind":
         """:meth:`wind` with the rotor diameter (tip radius in the rotor plane, precone
         included) and hub height (tower plus shaft height; without a tower the Wind's
         reference height) of ``turbine`` (model.Turbine)."""
-        radius = turbine.hub.radius + turbine.blade.length * math.cos(turbine.rotor.precone)
+        radius = float(turbine.distance_from_shaft(turbine.blade.length))
         height = (turbine.tower.length + turbine.nacelle.shaft_height
                   if turbine.tower is not None else
                   kwargs.get("reference_height", Wind.__dataclass_fields__[

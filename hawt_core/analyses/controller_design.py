@@ -33,9 +33,9 @@ def rotor_inertia(turbine, n: int = 2001) -> float:
     S = b.sections
     x = np.linspace(0.0, 1.0, n)
     s = x * b.length
-    r = turbine.hub.radius + s * np.cos(turbine.rotor.precone)
+    r = turbine.distance_from_shaft(s)
     m = np.interp(x, S.stations, S.mass)
-    rt = turbine.hub.radius + b.length * np.cos(turbine.rotor.precone)
+    rt = float(turbine.distance_from_shaft(b.length))
     blade = float(np.trapezoid(m * r * r, s)) + b.tip_mass * rt * rt
     return turbine.rotor.blades * blade + float(turbine.hub.inertia_longitudinal)
 

@@ -10,6 +10,7 @@ evaluation an aeroelastic steady state started from the last.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 from typing import Optional
 
@@ -127,7 +128,6 @@ def at_operating_point(turbine, wind_speed: float, schedule: dict, rotor_speed=N
     operating point at ``wind_speed`` [m/s] (``rotor_speed`` given: that speed, the
     schedule's pitch) and that point (operating_points' dict).  ValueError naming the wind
     when the schedule has no converged point there."""
-    import math
     U = float(wind_speed)
     point = operating_points(turbine, [U], schedule).points[0]
     if not point["converged"]:

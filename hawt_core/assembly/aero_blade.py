@@ -54,9 +54,8 @@ def annulus_mean(beam, r, a) -> float:
 
 def distance_from_shaft(turbine: Turbine, x) -> np.ndarray:
     """Distance [m] from the shaft axis of the points at span ``x`` [m] of the undeformed
-    blade: the root point is at the hub radius e in the hub plane (rigid/kane.py) and the
-    coned blade axis b1 leaves it, so e + x cos(precone)."""
-    return turbine.hub.radius + np.asarray(x) * np.cos(turbine.rotor.precone)
+    blade (Turbine.distance_from_shaft)."""
+    return turbine.distance_from_shaft(x)
 
 
 class AeroelasticBlade:

@@ -17,7 +17,7 @@ class Pacing:
         publish_rate of them (real_time_factor / step time)."""
         s = self.settings
         if s.real_time_factor > 0 and s.publish_rate > s.real_time_factor / self.dt * (1 + 1e-9):
-            if "publish_rate" not in (getattr(self, "_parameter_overrides", {}) or {}):
+            if not self._parameter_given("publish_rate"):
                 # the default rate: not the user's request, only a fact
                 self.get_logger().info(
                     f"publishing at {s.real_time_factor / self.dt:.3g} Hz, the rate of new "

@@ -92,7 +92,7 @@ class HawtNode(Pacing, StatePublisher, Recording, AnalysisServer, Overrides, Nod
         #: the turbine operates in wind under a controller (the closed loop is ``sim``)
         self.in_wind = self.settings.wind > 0
         if self.in_wind and self.turbine.aerodynamics is None:
-            if "wind" in (getattr(self, "_parameter_overrides", {}) or {}):
+            if self._parameter_given("wind"):
                 raise StartupError(
                     f"parameter wind: {self.settings.wind:g} m/s needs a turbine with an "
                     f"aerodynamics section; turbine '{self.turbine.name}' ({self.turbine_path})"
@@ -237,6 +237,10 @@ class HawtNode(Pacing, StatePublisher, Recording, AnalysisServer, Overrides, Nod
         self.sim_source = (f"closed loop in {s.wind:g} m/s wind{series} under {name} "
                            f"({discon})")
         self._SimulationError = SimulationError
+
+    def _parameter_given(self, name: str) -> bool:
+        """Whether ``name`` was set on the command line or in a launch file (not defaulted)."""
+        return name in (getattr(self, "_parameter_overrides", {}) or {})
 
     def _warn_unknown_overrides(self) -> None:
         overrides = getattr(self, "_parameter_overrides", {}) or {}
