@@ -294,6 +294,26 @@ def test_parameter_validation_messages():
             validate_request(**kw)
 
 
+def test_analysis_in_wind_is_at_the_hub_wind_of_now():
+    """A modal-analysis request of the node in wind is analysed at the hub speed of the
+    current instant: with the wind series '0:15,0.2:17' after 0.5 s that is 17 m/s (the
+    series' value; Wind.speed stays 15), with its direction and the node's DISCON.IN."""
+    _require_ros()
+    from types import SimpleNamespace
+    from hawt_core.aero.wind import parse_wind_series
+    from hawt_core.control.loop import ClosedLoop
+    from hawt_ros.node.analysis_server import AnalysisServer
+    from hawt_ros.params import validate_request
+    wind = parse_wind_series("0:15,0.2:17").wind(126.0, 90.0, direction=0.1)
+    sim = SimpleNamespace(wind=wind, t=0.5)
+    sim.hub_wind = lambda t: ClosedLoop.hub_wind(sim, t)
+    node = SimpleNamespace(in_wind=True, sim=sim, _discon_path="/x/DISCON.IN")
+    kw = AnalysisServer._job_kwargs(node, validate_request(0.0, 4, 0, ""))
+    assert kw["wind_speed"] == pytest.approx(17.0, rel=1e-12) and wind.speed == 15.0
+    assert kw["wind_direction"] == 0.1 and kw["discon"] == "/x/DISCON.IN"
+    assert kw["elements"] == 4
+
+
 def test_rotor_loads_match_rigid_dynamics():
     """The efforts: with pure hub loads the teeter moment equals what Kane's teeter row sees."""
     from hawt_core.assembly import TurbineModel

@@ -34,8 +34,9 @@ class AnalysisServer:
         the wind the node is in now (its speed and direction, the controller's schedule)."""
         kwargs = req.as_kwargs()
         if self.in_wind:
-            wind = self.sim.wind
-            kwargs.update(wind_speed=float(wind.speed), wind_direction=float(wind.direction),
+            # the hub speed now (a wind series or gust moves it away from Wind.speed)
+            kwargs.update(wind_speed=float(self.sim.hub_wind(self.sim.t)),
+                          wind_direction=float(self.sim.wind.direction),
                           discon=str(self._discon_path))
         return kwargs
 
