@@ -39,8 +39,6 @@ it.  The window is a solver choice, not a different time discretization.
 """
 from __future__ import annotations
 
-import time
-
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
@@ -91,14 +89,8 @@ class WindowSolver:
 
     #: a window is "slow" with a larger contraction rate or more iterations: the base is
     #: refreshed before the next window, or the window halved if the base was fresh
-    SLOW_CONTRACTION = 0.5
+    SLOW_CONTRACTION = 0.1
     SLOW_ITERATIONS = 6
-    #: below that, a stale base is refreshed once the iterations it cost beyond FAST_ITERATIONS
-    #: per window (wall time, since the last refresh) exceed the time of a refresh, so that
-    #: keeping a base never costs more than about twice the optimum (a refresh of the NREL
-    #: 5-MW with its flexible tower, n = 702, is ~35 residual evaluations: Jacobian, dense LU
-    #: and inverse)
-    FAST_ITERATIONS = 2
     #: the window doubles (up to its maximum) after this many windows contracting faster
     #: than CALM_CONTRACTION
     CALM_WINDOWS = 4
@@ -135,8 +127,6 @@ class WindowSolver:
         self._next_coupling = None
         self._theta_hist = []           # contraction rates of third and later iterations
         self._theta_age = 0             # two-iteration windows since the last such rate
-        self._refresh_seconds = 0.0     # wall time of the last refresh
-        self._extra_seconds = 0.0       # of iterations beyond FAST_ITERATIONS since then
         # statistics
         self.windows = 0
         self.iterations = 0
@@ -157,7 +147,6 @@ class WindowSolver:
     def refresh(self, x, yn, tm, h):
         """New base: exact step matrices at the step unknowns x (midpoint time tm), scaled,
         inverted (dense LU)."""
-        w0 = time.perf_counter()
         A, B = self._step_matrices(x, yn, tm, h)
         As = A * self.sc[None, :]
         rmax = np.abs(As).max(axis=1)
@@ -177,8 +166,6 @@ class WindowSolver:
         self.base_age = 0
         self.pending_refresh = False
         self.refreshes += 1
-        self._refresh_seconds = time.perf_counter() - w0
-        self._extra_seconds = 0.0
 
     def update_rigid(self, x, yn, tm, h, t_next=None):
         """Replace the rigid rows and columns of the base by their exact values at the step
@@ -289,7 +276,6 @@ class WindowSolver:
         self.base_age += 1
         dn_old = None
         theta = 0.0
-        w0 = time.perf_counter()
         for it in range(self.max_iter):
             G = self.residuals(X, yn, t0, h)
             if not np.all(np.isfinite(G)):
@@ -321,11 +307,7 @@ class WindowSolver:
         else:
             return self._fail(f"no convergence in {self.max_iter} iterations "
                               f"(last increment {dn:.3e}, tolerance {self.tol:.1e})")
-        its = it + 1
-        if its > self.FAST_ITERATIONS:
-            self._extra_seconds += (its - self.FAST_ITERATIONS) / its * \
-                (time.perf_counter() - w0)
-        self._adapt(its, theta)
+        self._adapt(it + 1, theta)
         self.windows += 1
         return X
 
@@ -349,8 +331,6 @@ class WindowSolver:
                 self.steps = max(self.MIN_STEPS, self.steps // 2)
             else:                       # the base is stale
                 self.pending_refresh = True
-        elif self.base_age > 1 and self._extra_seconds > self._refresh_seconds:
-            self.pending_refresh = True     # iterating costs more than a new base would
         elif theta < self.CALM_CONTRACTION:
             self._calm += 1
             if self._calm >= self.CALM_WINDOWS and self.steps < self.max_steps:
