@@ -262,6 +262,10 @@ class Polar:
             object.__setattr__(self, k, _frozen_array(getattr(self, k), 1))
 
 
+#: AeroDyn's default constant of the Pitt/Peters skewed-wake correction (SkewRedistrFactor).
+PITT_PETERS_SKEW = 15.0 * np.pi / 32.0
+
+
 @dataclass(frozen=True, eq=False)
 class Aerodynamics:
     """The blade's aerodynamic description (AeroDyn's blade file and airfoil polars), held
@@ -273,7 +277,9 @@ class Aerodynamics:
     index into ``polars`` of the station's airfoil; ``ac_prebend``, ``ac_sweep`` [m]: the
     aerodynamic centre's offsets along b3 and b2 (AeroDyn's BlCrvAC and -BlSwpAC; None =
     on the straight b1 axis); ``cant`` [rad]: the airfoil plane's tilt about the chord
-    (AeroDyn's BlCrvAng; None = 0).
+    (AeroDyn's BlCrvAng; None = 0).  ``skew_factor`` [-]: the constant K of Pitt and Peters'
+    skewed-wake correction of the axial induction in yawed or tilted flow (aero/inflow.py;
+    AeroDyn's SkewRedistrFactor, default 15 pi / 32); 0 = no correction.
     """
 
     stations: np.ndarray
@@ -284,8 +290,10 @@ class Aerodynamics:
     ac_prebend: Optional[np.ndarray] = None
     ac_sweep: Optional[np.ndarray] = None
     cant: Optional[np.ndarray] = None
+    skew_factor: float = PITT_PETERS_SKEW
 
     def __post_init__(self):
+        object.__setattr__(self, "skew_factor", float(self.skew_factor))
         for k in ("stations", "chord", "twist"):
             object.__setattr__(self, k, _frozen_array(getattr(self, k), 1))
         for k in ("ac_prebend", "ac_sweep", "cant"):

@@ -516,7 +516,8 @@ def campbell(turbine: Turbine, speeds, elements: Optional[int] = None,
     extra = None if wind is None else {
         "wind_speed": float(wind.speed), "wind_direction_deg": float(np.degrees(wind.direction)),
         "air_density": rho, "pitch_deg": float(np.degrees(-turbine.rotor.pitch)),
-        "aerodynamics": aero_description(inflow, airfoil)}
+        "aerodynamics": aero_description(inflow, airfoil,
+                                         turbine.aerodynamics.skew_factor)}
     return _assemble(turbine, arr, results, failures, errors, max_hz, frame, workers, t0,
                      extra=extra)
 
@@ -656,4 +657,5 @@ def campbell_in_wind(turbine: Turbine, wind_speeds, schedule: dict,
                          "wind_speeds": winds.tolist(), "air_density": rho,
                          "wind_direction_deg": float(np.degrees(direction)),
                          "pitch_deg": [p["pitch_deg"] for p in op],
-                         "aerodynamics": aero_description(inflow, airfoil)})
+                         "aerodynamics": aero_description(inflow, airfoil,
+                                         turbine.aerodynamics.skew_factor)})

@@ -47,7 +47,15 @@ alpha gives Jones's C(k) on the circulatory lift in attached flow (the attached-
 a Beddoes-Leishman model; the added-mass loads, the pitch-rate downwash and dynamic stall are
 not modelled).  Lift stays normal to the relative velocity.
 
-Not modelled here: skewed-wake correction of the inductions in yawed or tilted flow, loads on
+Skewed wake (``Aerodynamics.skew_factor`` K > 0, AeroDyn's default): in yawed or tilted flow
+the axial induced velocity (frozen or Oye's) is redistributed over the disk by Pitt and Peters'
+factor 1 + K (r / R) tan(chi / 2) cos(psi) (aero/inflow.py), larger on the downwind half, as
+AeroDyn applies it after its (D)BEMT inductions: the skew angle chi0 and the azimuth psi from
+the reference wind (its speed and direction at the hub, whatever the shear or shadow) and each
+blade's actual root frame, so a yaw or teeter motion changes them in the residual.  In axial
+flow the factor is 1.
+
+Not modelled here: the skewed-wake momentum correction (AeroDyn's SkewMomCorr), loads on
 the tower and nacelle, the aerodynamic centre's offset from the reference line.
 """
 from __future__ import annotations
@@ -57,7 +65,8 @@ from typing import Optional
 import numpy as np
 
 from ..aero.bem import prandtl_loss, quasi_steady_inductions
-from ..aero.inflow import oye_residuals, oye_steady, oye_time_constants
+from ..aero.inflow import (oye_residuals, oye_steady, oye_time_constants, skew_angles,
+                           skewed_wake_factor)
 from ..aero.strip import BladeStrips, inflow_sine
 from ..aero.unsteady import JONES
 from ..aero.wind import Wind
@@ -74,13 +83,16 @@ INFLOW_MODELS = ("frozen", "oye")
 AIRFOIL_MODELS = ("quasi-steady", "jones")
 
 
-def description(inflow: str = "frozen", airfoil: str = "quasi-steady") -> str:
+def description(inflow: str = "frozen", airfoil: str = "quasi-steady",
+                skew_factor: float = 0.0) -> str:
     """What the blades' aerodynamic model is, in a result's settings."""
     wake = ("frozen wake" if inflow == "frozen"
             else "Oye dynamic inflow per blade element")
     foil = ("quasi-steady airfoils" if airfoil == "quasi-steady"
             else "Jones two-state unsteady airfoils (attached flow)")
-    return f"blade-element momentum (Prandtl tip/hub loss, Buhl), {wake}, {foil}"
+    skew = (f", Pitt-Peters skewed wake (K = {skew_factor:.4g})" if skew_factor > 0
+            else "")
+    return f"blade-element momentum (Prandtl tip/hub loss, Buhl), {wake}{skew}, {foil}"
 
 
 
@@ -146,7 +158,10 @@ class RotorAerodynamics:
         self._swirl = (ap[:, :, None] * self.omega * self.r)[..., None]
         self.inductions = (a, ap)
         self.inflow, self.airfoil = inflow, airfoil
-        self.description = description(inflow, airfoil)
+        #: Pitt and Peters' skewed-wake constant K (0: no correction) and r / R per Gauss point
+        self.skew_factor = float(aero.skew_factor)
+        self.radius_ratio = self.r / float(distance_from_shaft(turbine, L))
+        self.description = description(inflow, airfoil, self.skew_factor)
         self.lag = JONES if airfoil == "jones" else None
         names = ["a", "a_tangential", "a_filter", "a_tangential_filter"] \
             if inflow == "oye" else []
@@ -196,7 +211,8 @@ class RotorAerodynamics:
         dimensions (..., Nb): ``vectors`` (..., Nb, m, 3), the shaft axis s3, the direction
         of rotation t (and the uniform free wind first, unless the wind is a field) in each
         root frame; for a field also ``B`` (the root bases, ..., Nb, 3, 3), ``P`` (the root
-        points relative to the tower top, ..., Nb, 3) and ``time`` (..., Nb).  From the root
+        points relative to the tower top, ..., Nb, 3) and ``time`` (..., Nb); with a skewed-wake
+        correction ``skew`` (..., Nb, 2): skew_angles of the reference wind.  From the root
         bases ``B``, the shaft basis ``S`` (..., 3, 3) (RigidSystem.frames: columns are unit
         vectors in N), the root points ``P`` and the times ``t`` (...)."""
         s3 = np.einsum("...ji,...j->...i", B, S[..., None, :, 2])
@@ -204,11 +220,12 @@ class RotorAerodynamics:
         tt = np.zeros(s3.shape, dtype=s3.dtype)
         norm = np.sqrt(s3[..., 1] ** 2 + s3[..., 2] ** 2)
         tt[..., 1], tt[..., 2] = s3[..., 2] / norm, -s3[..., 1] / norm
+        wind = np.einsum("...ji,j->...i", B, self.velocity)
+        skew = {"skew": np.stack(skew_angles(wind, s3), axis=-1)} if self.skew_factor else {}
         if not self.field:
-            wind = np.einsum("...ji,j->...i", B, self.velocity)
-            return {"vectors": np.stack([wind, s3, tt], axis=-2)}
+            return {"vectors": np.stack([wind, s3, tt], axis=-2), **skew}
         time = np.broadcast_to(np.asarray(t, float)[..., None], s3.shape[:-1])
-        return {"vectors": np.stack([s3, tt], axis=-2), "B": B, "P": P, "time": time}
+        return {"vectors": np.stack([s3, tt], axis=-2), "B": B, "P": P, "time": time, **skew}
 
     def loads(self, air, x=None, xd=None, out=None):
         """The beam's ``section_loads`` callback (fem/beam.py) for blades with root data
@@ -251,6 +268,13 @@ class RotorAerodynamics:
                 swirl = (ap * omega * self.r)[..., None]
             else:
                 axial, swirl = self._axial, self._swirl
+            if self.skew_factor:
+                # Pitt-Peters: more axial induction on the disk's downwind half
+                a_now = X[0] if self.inflow == "oye" else self.inductions[0][..., None]
+                skew = air["skew"]
+                axial = axial * skewed_wake_factor(skew[..., 0], skew[..., 1], a_now,
+                                                   self.radius_ratio,
+                                                   self.skew_factor)[..., None]
             W = wind - axial * s3 - swirl * t - st.to_section(sec["V"])
             alpha, w = st.angle_of_attack(W)
             out["alpha"] = alpha

@@ -38,7 +38,7 @@ __all__ = ["TurbineModel"]
 
 
 #: Trailing dimensions of each entry of the blades' root data (RotorAerodynamics.root_data).
-_AIR_TAIL = {"vectors": 2, "B": 2, "P": 1, "time": 0, "spin": 0}
+_AIR_TAIL = {"vectors": 2, "B": 2, "P": 1, "time": 0, "spin": 0, "skew": 1}
 
 #: Residual between the collocation times of a periodic steady state, relative to the load
 #: scale, that its harmonics must reach (solvers/periodic.py): in a vacuum, and in wind (the

@@ -204,7 +204,36 @@ def _main(deck: _Deck):
 
 #: AeroDyn options hawt reads but does not model yet (one warning lists the given ones).
 AERODYN_OPTIONS = ("Wake_Mod", "TwrPotent", "TwrShadow", "TwrAero", "UA_Mod", "DBEMT_Mod",
-                   "SkewMod", "TipLoss", "HubLoss", "TanInd", "AIDrag", "TIDrag")
+                   "SkewMomCorr", "TipLoss", "HubLoss", "TanInd", "AIDrag", "TIDrag")
+
+
+def _skew_factor(deck: _Deck, ad: dict, adn: str) -> float:
+    """The Pitt/Peters skewed-wake constant from AeroDyn's skew options: Skew_Mod = 1 with
+    SkewRedistr_Mod = 1 (or "default") takes SkewRedistrFactor ("default": 15 pi / 32);
+    Skew_Mod 0 or -1, or SkewRedistr_Mod 0: no correction (0).  A deck without the
+    options (an older AeroDyn) gets the default, with a note."""
+    from ..model import PITT_PETERS_SKEW
+
+    mode, redistr = ad.get("Skew_Mod"), ad.get("SkewRedistr_Mod")
+    if mode is None:
+        deck.notes.append(f"{adn}: no Skew_Mod: Pitt/Peters skewed-wake correction with "
+                          "K = 15 pi / 32 (AeroDyn's default)")
+        return PITT_PETERS_SKEW
+    if str(redistr).strip('"').lower() == "default":
+        redistr = 1
+    if mode not in (-1, 0, 1) or redistr not in (0, 1):
+        raise TurbineFileError(deck.sources["AeroDyn"], [
+            f"Skew_Mod = {mode!r}, SkewRedistr_Mod = {redistr!r}: allowed Skew_Mod -1, 0 or 1 "
+            "and SkewRedistr_Mod 0, 1 or default"])
+    if mode != 1 or redistr == 0:
+        return 0.0
+    factor = ad.get("SkewRedistrFactor")
+    if factor is None or str(factor).strip('"').lower() == "default":
+        return PITT_PETERS_SKEW
+    if not (isinstance(factor, (int, float)) and math.isfinite(factor) and factor >= 0):
+        raise TurbineFileError(deck.sources["AeroDyn"], [
+            f"SkewRedistrFactor = {factor!r}: allowed a number >= 0 or default"])
+    return float(factor)
 
 
 def _aerodynamics(deck: _Deck, comp: dict, nb: int, length: float):
@@ -277,11 +306,13 @@ def _aerodynamics(deck: _Deck, comp: dict, nb: int, length: float):
         deck.warnings.append(f"{adn}: the unsteady-aerodynamics coefficients (InclUAdata) of "
                              f"{len(ua)} airfoils read but not kept: hawt's unsteady airfoil "
                              "model is yet to come")
+    extra["skew_factor"] = _skew_factor(deck, ad, adn)
     given = [f"{k} = {ad[k]}" for k in AERODYN_OPTIONS if ad.get(k) not in (None, 0, False)]
     if given:
-        deck.warnings.append(f"{adn}: {', '.join(given)} read but not modelled yet: hawt keeps "
-                             "the blade and its polars for its aerodynamics, and its analyses "
-                             "run in a vacuum")
+        deck.warnings.append(f"{adn}: {', '.join(given)} read but not taken: hawt's "
+                             "aerodynamics are its own models (BEM with Prandtl's tip and hub "
+                             "losses and drag in the inductions, frozen wake or --inflow oye, "
+                             "--airfoil jones, no tower aerodynamics; docs/aerodynamics.md)")
     deck.notes.append(f"aerodynamics: {len(t['BlSpn'])} AeroDyn blade stations and "
                       f"{len(polars)} airfoil polars (first table each), kept in the model")
     return Aerodynamics(stations=t["BlSpn"], chord=t["BlChord"],

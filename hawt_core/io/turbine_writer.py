@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from ..model import Beam, SectionTable, Turbine
+from ..model import PITT_PETERS_SKEW, Beam, SectionTable, Turbine
 from .turbine_yaml import MASS_DIAGONAL, MASS_PROPS, SCALAR_PROPS, STIFF_PROPS
 
 __all__ = ["dump_turbine", "turbines_equal"]
@@ -69,6 +69,8 @@ def _aero_dict(a) -> dict:
     for key in ("ac_prebend", "ac_sweep", "cant"):
         if getattr(a, key) is not None:
             out[key] = _compact(getattr(a, key))
+    if a.skew_factor != PITT_PETERS_SKEW:
+        out["skew_factor"] = float(a.skew_factor)
     out["polars"] = [{"name": str(p.name),
                       **({"reynolds": float(p.reynolds)} if p.reynolds is not None else {}),
                       **({"thickness": float(p.thickness)} if p.thickness is not None else {}),

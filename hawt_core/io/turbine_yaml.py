@@ -33,8 +33,8 @@ import yaml
 from ..numerics.limits import (MAX_BLADES, MAX_ELEMENTS, MAX_FILE_BYTES, MAX_POLAR_ANGLES,
                                MAX_POLARS, MAX_ROTOR_SPEED, MAX_SCALAR_CHARS, MAX_YAML_DEPTH,
                                MAX_YAML_VALUES)
-from ..model import (GENERATOR_MODES, Aerodynamics, Beam, Drivetrain, Gravity, Hub, Nacelle,
-                     Polar, Rotor, SectionTable, Turbine)
+from ..model import (GENERATOR_MODES, PITT_PETERS_SKEW, Aerodynamics, Beam, Drivetrain,
+                     Gravity, Hub, Nacelle, Polar, Rotor, SectionTable, Turbine)
 from .checker import _Checker, _plain, _show, _type_name
 
 __all__ = [
@@ -184,7 +184,7 @@ def _parse_yaml(text: str, source: str):
 _TOP = {"name": False, "rotor": True, "hub": True, "nacelle": True, "blade": True,
         "tower": False, "gravity": False, "drivetrain": False, "aerodynamics": False}
 _AERO = {"stations": True, "chord": True, "twist": True, "airfoil": True, "polars": True,
-         "ac_prebend": False, "ac_sweep": False, "cant": False}
+         "ac_prebend": False, "ac_sweep": False, "cant": False, "skew_factor": False}
 _POLAR = {"name": True, "alpha": True, "cl": True, "cd": True, "cm": True,
           "reynolds": False, "thickness": False}
 _DRIVETRAIN = {"stiffness": False, "damping": False, "generator_inertia": False,
@@ -404,6 +404,7 @@ def _aerodynamics(c: _Checker, value: Any) -> Optional[Aerodynamics]:
     parts = {k: c.per_station(d[k], f"{path}.{k}", ns, rule) for k, rule in
              (("chord", "> 0"), ("twist", "finite"), ("ac_prebend", "finite"),
               ("ac_sweep", "finite"), ("cant", "angle")) if k in d}
+    skew = c.number(d, "skew_factor", path, ">= 0", PITT_PETERS_SKEW)
     idx = None
     if "airfoil" in d:
         raw = _plain(d["airfoil"])
@@ -420,9 +421,11 @@ def _aerodynamics(c: _Checker, value: Any) -> Optional[Aerodynamics]:
         else:
             idx = np.array(raw, int)
     if len(c.errors) > n_errors or st is None or idx is None \
-            or any(p is None for p in polars) or any(v is None for v in parts.values()):
+            or any(p is None for p in polars) or any(v is None for v in parts.values()) \
+            or skew is None:
         return None
-    return Aerodynamics(stations=st, airfoil=idx, polars=tuple(polars), **parts)
+    return Aerodynamics(stations=st, airfoil=idx, polars=tuple(polars), skew_factor=skew,
+                        **parts)
 
 
 def _build(c: _Checker, data: Any, default_name: str) -> Optional[Turbine]:
