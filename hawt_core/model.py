@@ -305,6 +305,22 @@ class Aerodynamics:
         object.__setattr__(self, "polars", tuple(self.polars))
 
 
+@dataclass(frozen=True, eq=False)
+class TowerAerodynamics:
+    """The tower's aerodynamic drag (AeroDyn's tower table with TwrAero = True): per station
+    (``stations``: fractions of the tower's length from its base, 0 to 1) the outer
+    ``diameter`` [m] and the ``drag`` coefficient [-] of the flow across the tower axis.
+    Used in wind on a flexible tower (assembly/tower_aero.py)."""
+
+    stations: np.ndarray
+    diameter: np.ndarray
+    drag: np.ndarray
+
+    def __post_init__(self):
+        for k in ("stations", "diameter", "drag"):
+            object.__setattr__(self, k, _frozen_array(getattr(self, k), 1))
+
+
 @dataclass(frozen=True)
 class Gravity:
     enabled: bool = False
@@ -315,7 +331,8 @@ class Gravity:
 class Turbine:
     """A whole turbine. ``tower`` None means a rigid tower (the paper's example);
     ``drivetrain`` None a rigid shaft turning at the prescribed rotor speed (the paper's);
-    ``aerodynamics`` None: no aerodynamic description (the paper's turbine in a vacuum)."""
+    ``aerodynamics`` None: no aerodynamic description (the paper's turbine in a vacuum);
+    ``tower_aerodynamics`` None: no drag on the tower."""
 
     name: str
     rotor: Rotor
@@ -326,6 +343,7 @@ class Turbine:
     gravity: Gravity = field(default_factory=Gravity)
     drivetrain: Optional[Drivetrain] = None
     aerodynamics: Optional[Aerodynamics] = None
+    tower_aerodynamics: Optional[TowerAerodynamics] = None
 
     def with_rotor_speed(self, speed: float) -> "Turbine":
         return replace(self, rotor=replace(self.rotor, speed=float(speed)))

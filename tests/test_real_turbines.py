@@ -150,7 +150,7 @@ def test_nrel5mw_deck_values_land_where_the_model_expects_them():
     assert t.tower.length == 87.6 and t.tower.sections.ei2[0] == 6.14343e11
     assert t.gravity.enabled and t.gravity.g == 9.80665
     joined = " ".join(r.warnings)
-    for word in ("BldFl1Sh", "TwFAM1Sh", "Wake_Mod", "InclUAdata", "torsional rigidity"):
+    for word in ("BldFl1Sh", "TwFAM1Sh", "DBEMT_Mod", "InclUAdata", "torsional rigidity"):
         assert word in joined, word
     # DrTrDOF: shaft torsion; GenDOF with ServoDyn's torque controller (not modelled): the
     # generator is held at the rotor speed, and the import says so

@@ -33,6 +33,7 @@ from ..numerics.rotations import cross, rot_T_apply
 from ..rigid import RigidSystem
 from .layout import StateLayout
 from .rotor_aero import RotorAerodynamics
+from .tower_aero import TowerDrag
 
 __all__ = ["TurbineModel"]
 
@@ -86,6 +87,10 @@ class TurbineModel:
         self.aero = (RotorAerodynamics(turbine, wind, self.rotor_speed, self.beam, rho,
                                        inductions, inflow, airfoil)
                      if wind is not None else None)
+        #: the flexible tower's drag in wind (None: none, or no tower table, or rigid tower)
+        self.tower_drag = (TowerDrag(turbine, self.tower, wind, rho)
+                           if wind is not None and self.tower is not None
+                           and turbine.tower_aerodynamics is not None else None)
         #: what a periodic steady state's harmonics must reach (solvers/periodic.py)
         self.interpolation_tol = AERO_INTERPOLATION_TOL if wind is not None \
             else INTERPOLATION_TOL
@@ -140,6 +145,8 @@ class TurbineModel:
         if self.aero is None:
             raise ValueError("wind: this model is in a vacuum (built without wind)")
         self.aero.set_wind(wind)
+        if self.tower_drag is not None:
+            self.tower_drag.set_wind(wind)
         self.wind = wind
 
     @property
@@ -212,14 +219,18 @@ class TurbineModel:
                                                               out))
         return np.concatenate([rb, out["rows"]], axis=1) if self.n_aero else rb
 
-    def _tower_residual(self, ydt, yt, tip_loads, batch=1):
-        """Tower beam rows (batch, n_t): clamped at the ground (root frame inertial, at rest),
-        gravity along -t1, tip loads = the rigid system's loads on the tower top."""
+    def _tower_residual(self, ydt, yt, tip_loads, batch=1, t=0.0):
+        """Tower beam rows (batch, n_t) at times ``t`` (scalar or (batch,)): clamped at the
+        ground (root frame inertial, at rest), gravity along -t1, tip loads = the rigid
+        system's loads on the tower top, the tower's drag in wind (tower_aero.py)."""
         tip_loads = np.atleast_2d(tip_loads)
         z = np.zeros((batch, 3), dtype=tip_loads.dtype)
         g = None if self._tower_g is None else np.repeat(self._tower_g, batch, axis=0)
         tl = np.broadcast_to(tip_loads, (batch, 6))
-        return self.tower.residual(ydt, yt, z, z, g, tl[:, :3], tl[:, 3:])
+        drag = None if self.tower_drag is None else self.tower_drag.section_loads(
+            np.broadcast_to(np.asarray(t, float), (batch,)))
+        return self.tower.residual(ydt, yt, z, z, g, tl[:, :3], tl[:, 3:],
+                                   section_loads=drag)
 
     def aero_loads(self, y, t):
         """Aerodynamic loads on each blade at the state ``y`` and time ``t`` [s], integrated
@@ -294,7 +305,7 @@ class TurbineModel:
                                   self._air_flat(self._air(q, u, t, tw), K * nb))
         rk = self.rigid.kinematics(q, qd, u, t)
         gf = self.rigid.generalized_forces(q, u, ud, t, yb[:, :, 0:3], yb[:, :, 3:6], tw)
-        rt = self._tower_residual(ydot[:, to:], y[:, to:], gf[:, nu:], K)
+        rt = self._tower_residual(ydot[:, to:], y[:, to:], gf[:, nu:], K, t)
         return np.concatenate([rk.reshape(K, nq), gf[:, :nu], rb.reshape(K, nb * nbl),
                                rt.reshape(K, -1)], axis=1)
 
@@ -408,7 +419,7 @@ class TurbineModel:
         gf = self.rigid.generalized_forces(q, u, ud, t, yb[:, 0:3], yb[:, 3:6], tw)
         tip = gf[nu:]
         self._block_jacobians(self._tower_jac,
-                              lambda Yd, Y, C: self._tower_residual(Yd, Y, tip, C),
+                              lambda Yd, Y, C: self._tower_residual(Yd, Y, tip, C, t),
                               yt[None], ydt[None], [to], Jy_parts, Jd_parts)
 
         # blade rows w.r.t. rigid q, u and the tower-top theta, V, Omega (root motion,

@@ -202,9 +202,54 @@ def _main(deck: _Deck):
     return comp
 
 
-#: AeroDyn options hawt reads but does not model yet (one warning lists the given ones).
-AERODYN_OPTIONS = ("Wake_Mod", "TwrPotent", "TwrShadow", "TwrAero", "UA_Mod", "DBEMT_Mod",
-                   "SkewMomCorr", "TipLoss", "HubLoss", "TanInd", "AIDrag", "TIDrag")
+#: AeroDyn options hawt reads but does not take: its own models are chosen by flags
+#: (--inflow, --airfoil); warned when set.
+AERODYN_OPTIONS = ("TwrPotent", "TwrShadow", "UA_Mod", "DBEMT_Mod", "SkewMomCorr")
+#: AeroDyn options whose setting hawt always has (BEM with induction, Prandtl's tip and hub
+#: losses, tangential induction, drag in both induction equations); warned when different.
+AERODYN_FIXED = {"Wake_Mod": 1, "TipLoss": True, "HubLoss": True, "TanInd": True,
+                 "AIDrag": True, "TIDrag": True}
+
+
+def _tower_aerodynamics(deck: _Deck, tower):
+    """AeroDyn's tower table (TwrElev, TwrDiam, TwrCd) as model.TowerAerodynamics when
+    TwrAero = True and the tower is flexible, else None (with a note)."""
+    from ..model import TowerAerodynamics
+
+    ad = deck.vt.get("AeroDyn") or {}
+    if "AeroDyn" not in deck.sources or not ad.get("TwrAero"):
+        return None
+    adn = Path(deck.sources["AeroDyn"]).name
+    if tower is None:
+        deck.notes.append(f"{adn}: TwrAero = True on a rigid tower: the tower drag loads "
+                          "nothing and is not kept")
+        return None
+    base = deck.number("ElastoDyn", "TowerBsHt")
+    elev = np.asarray(ad.get("TwrElev") or [], float)
+    s = (elev - base) / tower.length
+    diam, cd = (np.asarray(ad.get(k) or [], float) for k in ("TwrDiam", "TwrCd"))
+    problems = []
+    if elev.size < 2 or diam.size != elev.size or cd.size != elev.size:
+        problems.append(f"NumTwrNds = {ad.get('NumTwrNds')!r}: TwrAero = True needs a tower "
+                        "table of at least 2 rows (TwrElev, TwrDiam, TwrCd)")
+    elif np.any(np.diff(s) <= 0) or s[0] < -1e-6 or s[-1] > 1 + 1e-6:
+        problems.append(f"TwrElev = {elev.tolist()}: must increase strictly within the tower, "
+                        f"TowerBsHt = {base:g} to TowerHt = {base + tower.length:g} m")
+    elif np.any(diam <= 0) or np.any(cd < 0):
+        problems.append(f"TwrDiam = {diam.tolist()}, TwrCd = {cd.tolist()}: allowed TwrDiam "
+                        "> 0 and TwrCd >= 0")
+    if problems:
+        raise TurbineFileError(deck.sources["AeroDyn"], problems)
+    # the table may stop short of the tower's ends: the end rows hold beyond
+    s = np.clip(s, 0.0, 1.0)
+    if s[0] > 0:
+        s, diam, cd = np.r_[0.0, s], np.r_[diam[0], diam], np.r_[cd[0], cd]
+    if s[-1] < 1:
+        s, diam, cd = np.r_[s, 1.0], np.r_[diam, diam[-1]], np.r_[cd, cd[-1]]
+    deck.notes.append(f"tower aerodynamics: drag of {elev.size} AeroDyn tower nodes (TwrAero; "
+                      f"TwrDiam {diam.min():g} to {diam.max():g} m, TwrCd {cd.min():g} to "
+                      f"{cd.max():g}), kept in the model")
+    return TowerAerodynamics(stations=s, diameter=diam, drag=cd)
 
 
 def _skew_factor(deck: _Deck, ad: dict, adn: str) -> float:
@@ -305,14 +350,17 @@ def _aerodynamics(deck: _Deck, comp: dict, nb: int, length: float):
     if ua:
         deck.warnings.append(f"{adn}: the unsteady-aerodynamics coefficients (InclUAdata) of "
                              f"{len(ua)} airfoils read but not kept: hawt's unsteady airfoil "
-                             "model is yet to come")
+                             "(--airfoil jones) is attached flow, without dynamic stall")
     extra["skew_factor"] = _skew_factor(deck, ad, adn)
     given = [f"{k} = {ad[k]}" for k in AERODYN_OPTIONS if ad.get(k) not in (None, 0, False)]
+    given += [f"{k} = {ad[k]}" for k, v in AERODYN_FIXED.items()
+              if ad.get(k) is not None and ad.get(k) != v]
     if given:
         deck.warnings.append(f"{adn}: {', '.join(given)} read but not taken: hawt's "
                              "aerodynamics are its own models (BEM with Prandtl's tip and hub "
-                             "losses and drag in the inductions, frozen wake or --inflow oye, "
-                             "--airfoil jones, no tower aerodynamics; docs/aerodynamics.md)")
+                             "losses, tangential induction and drag in the inductions, frozen "
+                             "wake or --inflow oye, --airfoil jones, the tower's drag from "
+                             "TwrAero's table; docs/aerodynamics.md)")
     deck.notes.append(f"aerodynamics: {len(t['BlSpn'])} AeroDyn blade stations and "
                       f"{len(polars)} airfoil polars (first table each), kept in the model")
     return Aerodynamics(stations=t["BlSpn"], chord=t["BlChord"],
@@ -657,6 +705,7 @@ def read_openfast(path) -> ImportResult:
                       gravity=Gravity(enabled=g > 0, g=g if g > 0 else 9.81),
                       drivetrain=_drivetrain(deck, ed_file, servo),
                       aerodynamics=_aerodynamics(deck, comp, nb, tip - hubr))
+    turbine = replace(turbine, tower_aerodynamics=_tower_aerodynamics(deck, tower))
     return ImportResult(turbine=turbine, importer=IMPORTER, main_role=MAIN,
                         warnings=deck.warnings, notes=deck.notes, sources=deck.sources,
                         packages={"Examples": "rosco"})

@@ -134,6 +134,11 @@ def dump_turbine(turbine: Turbine, header: str | None = None) -> str:
                               "generator": str(dt.generator)}
     if turbine.aerodynamics is not None:
         data["aerodynamics"] = _aero_dict(turbine.aerodynamics)
+    ta = turbine.tower_aerodynamics
+    if ta is not None:
+        data["tower_aerodynamics"] = {"stations": ta.stations.tolist(),
+                                      "diameter": _compact(ta.diameter),
+                                      "drag": _compact(ta.drag)}
     top = ("# hawt turbine file, written by hawt_core.io.dump_turbine.\n"
            "# SI units (m, kg, s, N), angles in rad, rotor speed in rad/s; "
            "see docs/turbine-format.md.\n")

@@ -34,7 +34,8 @@ from ..numerics.limits import (MAX_BLADES, MAX_ELEMENTS, MAX_FILE_BYTES, MAX_POL
                                MAX_POLARS, MAX_ROTOR_SPEED, MAX_SCALAR_CHARS, MAX_YAML_DEPTH,
                                MAX_YAML_VALUES)
 from ..model import (GENERATOR_MODES, PITT_PETERS_SKEW, Aerodynamics, Beam, Drivetrain,
-                     Gravity, Hub, Nacelle, Polar, Rotor, SectionTable, Turbine)
+                     Gravity, Hub, Nacelle, Polar, Rotor, SectionTable, TowerAerodynamics,
+                     Turbine)
 from .checker import _Checker, _plain, _show, _type_name
 
 __all__ = [
@@ -182,7 +183,9 @@ def _parse_yaml(text: str, source: str):
 # The schema: for each section, its keys and whether they are required.
 
 _TOP = {"name": False, "rotor": True, "hub": True, "nacelle": True, "blade": True,
-        "tower": False, "gravity": False, "drivetrain": False, "aerodynamics": False}
+        "tower": False, "gravity": False, "drivetrain": False, "aerodynamics": False,
+        "tower_aerodynamics": False}
+_TOWER_AERO = {"stations": True, "diameter": True, "drag": True}
 _AERO = {"stations": True, "chord": True, "twist": True, "airfoil": True, "polars": True,
          "ac_prebend": False, "ac_sweep": False, "cant": False, "skew_factor": False}
 _POLAR = {"name": True, "alpha": True, "cl": True, "cd": True, "cm": True,
@@ -428,6 +431,22 @@ def _aerodynamics(c: _Checker, value: Any) -> Optional[Aerodynamics]:
                         **parts)
 
 
+def _tower_aerodynamics(c: _Checker, value: Any) -> Optional[TowerAerodynamics]:
+    path = "tower_aerodynamics"
+    n_errors = len(c.errors)
+    d = c.mapping(value, path, _TOWER_AERO)
+    if d is None:
+        return None
+    st = c.stations(d["stations"], f"{path}.stations") if "stations" in d else None
+    ns = None if st is None else len(st)
+    parts = {k: c.per_station(d[k], f"{path}.{k}", ns, rule) for k, rule in
+             (("diameter", "> 0"), ("drag", ">= 0")) if k in d}
+    if len(c.errors) > n_errors or st is None or len(parts) < 2 \
+            or any(v is None for v in parts.values()):
+        return None
+    return TowerAerodynamics(stations=st, **parts)
+
+
 def _build(c: _Checker, data: Any, default_name: str) -> Optional[Turbine]:
     if not isinstance(data, Mapping):
         c.add(lambda: f"the turbine must be a mapping with the sections {', '.join(_TOP)}; "
@@ -520,13 +539,20 @@ def _build(c: _Checker, data: Any, default_name: str) -> Optional[Turbine]:
 
     aero = _aerodynamics(c, data["aerodynamics"]) if data.get("aerodynamics") is not None \
         else None
+    tower_aero = None
+    if data.get("tower_aerodynamics") is not None:
+        tower_aero = _tower_aerodynamics(c, data["tower_aerodynamics"])
+        if "tower" not in data:
+            c.error("tower_aerodynamics", "needs a flexible tower (a tower section): the drag "
+                                          "of a rigid tower would load nothing",
+                    "(no tower section)")
 
     parts = (rotor, hub, nacelle)
     if c.errors or blade is None or any(p is None or None in p.values() for p in parts):
         return None
     return Turbine(name=name, rotor=Rotor(**rotor), hub=Hub(**hub), nacelle=Nacelle(**nacelle),
                    blade=blade, tower=tower, gravity=gravity, drivetrain=drivetrain,
-                   aerodynamics=aero)
+                   aerodynamics=aero, tower_aerodynamics=tower_aero)
 
 
 def turbine_from_dict(d: Mapping, source: str = "<dict>", *, _default_name: str = "unnamed",
