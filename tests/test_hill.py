@@ -132,3 +132,50 @@ def test_hill_in_multiblade_coordinates_equals_the_monodromy_with_gravity_and_ti
     assert set(tr) <= set(ta) and len(tr) >= 8
     for key, eta in tr.items():
         assert abs(ta[key] - eta) <= 2e-7 * abs(eta), (key, ta[key], eta)
+
+
+def test_modes_refined_one_by_one_equal_the_whole_band_at_their_truncation(monkeypatch):
+    """Reference: the whole-band search at a fixed truncation H (the same pencil, every
+    window).  The three-bladed rotor with gravity and tilt in multi-blade coordinates,
+    truncation "converged" with the one-by-one refinement forced for every mode still
+    moving after H = 1 (TARGETED_MODES large): each exponent taken at H equals the
+    whole-band exponent at that H (1e-10 relative to max(|eta|, w); the free yaw's double
+    zero aside), the refinement ran, and the vectors of modes taken at a lower H are zero in
+    the outer harmonics (modes carry different H)."""
+    import hawt_core.solvers.hill as hill
+    from hawt_core.analyses.modal import periodic_dae
+    from hawt_core.assembly import TurbineModel
+    from hawt_core.solvers.multiblade import MultiBladeTransform
+    from hawt_core.solvers.periodic import periodic_steady_state
+
+    P = load_turbine("hawt_core/data/three_blade_rotor.yaml")
+    T = dc.replace(P, gravity=dc.replace(P.gravity, enabled=True),
+                   nacelle=dc.replace(P.nacelle, shaft_tilt=0.1))
+    model = TurbineModel(T, elements=2)
+    mbc = MultiBladeTransform(model).dae(periodic_dae(model, periodic_steady_state(model)))
+    band = 8.0 * model.rotor_speed
+    calls = []
+    refine = hill._refine
+
+    def counted(*a, **k):
+        out = refine(*a, **k)
+        calls.append(out is not None)          # None: fell back to the whole band
+        return out
+    monkeypatch.setattr(hill, "_refine", counted)
+    monkeypatch.setattr(hill, "TARGETED_MODES", 10 ** 6)
+    got = hill_modes(mbc, band, truncation="converged", converged_tol=1e-9)
+    assert calls and all(calls) and got.harmonics >= 2
+    with pytest.warns(RuntimeWarning):              # fixed H: the tails are not converged
+        whole = {H: hill_modes(mbc, band, harmonics=H) for H in range(1, got.harmonics + 1)}
+    w = mbc.omega
+    H_of = []
+    for i, eta in enumerate(got.exponents):
+        if abs(eta) < 1e-6 * w:       # the free yaw's double zero, split by round-off
+            continue
+        v = got.vectors[:, :, i]
+        inner = np.flatnonzero(np.abs(v).max(axis=1) > 0)
+        H = (inner.max() - inner.min()) // 2              # the harmonics the mode carries
+        H_of.append(H)
+        ref = whole[max(H, 1)].exponents
+        assert np.abs(ref - eta).min() <= 1e-10 * max(abs(eta), w), (eta, H)
+    assert len(set(H_of)) >= 2                              # modes taken at different H
