@@ -80,7 +80,7 @@ class HillModes:
     timings: dict = field(default_factory=dict)
     solves: int = 0
     #: "converged" truncation: the largest relative exponent change from H - 1 to H (see
-    #: _exponent_change), a bound on the exponents' truncation error (None for "tail")
+    #: _converged_modes), a bound on the exponents' truncation error (None for "tail")
     change: Optional[float] = None
 
     def periodic(self, i: int, times, rows=None) -> np.ndarray:
@@ -282,12 +282,14 @@ def hill_modes(dae: LinearPeriodicDAE, max_frequency: float, harmonics: Optional
     harmonics above 1e-3 of the largest, grown by half while a kept vector holds more than
     ``tail_tol`` of its energy in the outermost harmonics |k| = H; measured on the paper's
     turbine, the relative exponent error is about sqrt(tail)/10 there).  ``truncation=
-    "converged"`` instead grows H = 0, 1, 2, ... until no exponent moves by more than
-    ``converged_tol`` relative to max(|eta|, w) (see _exponent_change): for weakly periodic
-    systems (an isotropic rotor's multi-blade coordinates, whose periodicity is only gravity
-    and tilt), where the tail of a vector mixed by a near-resonance stays large although its
-    exponent has converged (NREL 5-MW: tail 2.6e-2 at H = 1, exponents already within 3e-8 w
-    of H = 4).  ``change`` of the result is that relative move.  ``observed``, ``weights``: rows and weights (on squared amplitudes)
+    "converged"`` instead takes each exponent at the first H = 0, 1, 2, ... at which it moved
+    by at most ``converged_tol`` relative to max(|eta|, w) (_converged_modes): for weakly
+    periodic systems (an isotropic rotor's multi-blade coordinates, whose periodicity is only
+    gravity and tilt), where the tail of a vector mixed by a near-resonance stays large
+    although its exponent has converged (NREL 5-MW: tail 2.6e-2 at H = 1, exponents already
+    within 3e-8 w of H = 4).  ``change`` of the result is the largest such move of the kept
+    exponents; ``harmonics`` the largest H used.  ``observed``, ``weights``: rows and weights
+    (on squared amplitudes)
     of the dominant-harmonic test (default: the differential rows, weight 1).  An exponent
     whose real part exceeds half the width of the window that finds it (at least w / 2^8) is
     missed: heavily damped modes need their own search."""
@@ -390,7 +392,7 @@ def _converged_modes(fc, n: int, w: float, band: float, obs, wts, stats: dict, t
     """The "converged" truncation: (lam, V, tails, H, change).  H = 0 and H = 1 search the
     whole band; a mode is accepted at the first H at which it moved by at most ``tol``
     (relative to max(|eta|, w)) from H - 1 (modes above 0.9 of the band, whose partners may
-    have left it, are accepted as found, as in _exponent_change).  The few still moving are
+    have left it, are accepted as found).  The few still moving are
     then refined one by one at H + 1, H + 2, ...: shift-invert about each one's last value on
     the larger pencil, the nearest centred eigenvalue taken, and accepted by the same rule;
     when many move, or a refinement is ambiguous (no centred eigenvalue near, two modes on
@@ -483,20 +485,3 @@ def _lost(previous, lam, edge: float, w: float) -> bool:
     if not lam.size:
         return True
     return bool((np.abs(a[:, None] - lam[None, :]).min(axis=1) > 0.25 * w).any())
-
-
-def _exponent_change(previous, lam, band: float, w: float) -> float:
-    """Largest distance from each exponent below 0.9 ``band`` to the nearest of the other
-    truncation's, relative to max(|eta|, w), both ways (those near the band's edge may cross
-    it); infinite when there is nothing to compare with."""
-    if previous is None:
-        return math.inf
-    worst = 0.0
-    for a, b in ((lam, previous), (previous, lam)):
-        a = a[a.imag <= 0.9 * band]
-        if a.size and not b.size:
-            return math.inf
-        if a.size:
-            d = np.abs(a[:, None] - b[None, :]).min(axis=1) / np.maximum(np.abs(a), w)
-            worst = max(worst, float(d.max()))
-    return worst
