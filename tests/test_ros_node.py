@@ -773,7 +773,7 @@ def test_analysis_workers_end_with_the_node(spawn, sig):
 @ros
 def test_play_reproduces_topics(ros_env, tmp_path):
     """A recorded file played back by `hawt play` reaches a subscriber with its content and
-    its original timing."""
+    its original timing (median gap 50 ms within 12 ms, total 0.95 s within 0.5 s)."""
     from hawt_ros.bag import BagWriter
     from std_msgs.msg import Header
     from builtin_interfaces.msg import Time
@@ -806,9 +806,13 @@ def test_play_reproduces_topics(ros_env, tmp_path):
     items = js.snapshot()
     assert [m.position[0] for _, _, m in items] == pytest.approx([0.1 * i for i in range(20)])
     gaps = np.diff([t for t, _, _ in items])
-    print(f"\nplay: 20 joint states, mean gap {gaps.mean() * 1e3:.1f} ms (recorded 50 ms), "
-          f"total {(items[-1][0] - items[0][0]):.3f} s (recorded 0.95 s)")
-    assert items[-1][0] - items[0][0] == pytest.approx(0.95, abs=0.25)
+    print(f"\nplay: 20 joint states, median gap {np.median(gaps) * 1e3:.1f} ms (recorded 50 "
+          f"ms), total {(items[-1][0] - items[0][0]):.3f} s (recorded 0.95 s)")
+    # the pacing, judged on the median gap: one sample repaired late by the reliable
+    # transport (seen once: 1.35 s in all) must not decide; as fast as possible gives ~0 ms,
+    # half rate 100 ms
+    assert np.median(gaps) == pytest.approx(0.05, abs=0.012)
+    assert items[-1][0] - items[0][0] == pytest.approx(0.95, abs=0.5)
     assert sorted(m.blade for m in bd.msgs()) == [0] * 20 + [1] * 20
 
 
