@@ -182,10 +182,13 @@ def test_the_deck_table_is_read_and_the_file_round_trips(tmp_path):
 
 def test_tower_drag_needs_the_table_and_a_flexible_tower():
     """Bad input: TowerDrag without a table names what it needs; a model in a vacuum or on a
-    rigid tower has none."""
+    rigid tower has none; the results' description names the tower drag and the skewed
+    wake."""
     t = nrel5mw()
     with pytest.raises(ValueError, match="tower_aerodynamics"):
         TowerDrag(replace(t, tower_aerodynamics=None), None, Wind(8.0), RHO)
     assert TurbineModel(t, elements=2).tower_drag is None
+    described = TurbineModel(t, elements=2, wind=Wind(8.0)).aero_description
+    assert "tower drag" in described and "Pitt-Peters skewed wake" in described
     assert TurbineModel(replace(t, tower=None), elements=2,
                         wind=Wind(8.0)).tower_drag is None

@@ -56,6 +56,13 @@ from .modal import (DEFAULT_MAX_PER_REV, DEFAULT_STEPS, MAX_STEPS, STEPS_PER_CYC
 __all__ = ["campbell", "campbell_in_wind", "campbell_point", "track_modes", "unwrap_harmonics", "check_speeds"]
 
 
+def _aero_description(turbine, inflow: str, airfoil: str) -> str:
+    """The settings' description of the aerodynamic model a sweep in wind uses."""
+    return aero_description(inflow, airfoil, turbine.aerodynamics.skew_factor,
+                            turbine.tower is not None
+                            and turbine.tower_aerodynamics is not None)
+
+
 #: Weight of the relative frequency change (after the harmonic re-indexing found by the MAC)
 #: in the assignment cost.
 FREQUENCY_WEIGHT = 0.2
@@ -516,8 +523,7 @@ def campbell(turbine: Turbine, speeds, elements: Optional[int] = None,
     extra = None if wind is None else {
         "wind_speed": float(wind.speed), "wind_direction_deg": float(np.degrees(wind.direction)),
         "air_density": rho, "pitch_deg": float(np.degrees(-turbine.rotor.pitch)),
-        "aerodynamics": aero_description(inflow, airfoil,
-                                         turbine.aerodynamics.skew_factor)}
+        "aerodynamics": _aero_description(turbine, inflow, airfoil)}
     return _assemble(turbine, arr, results, failures, errors, max_hz, frame, workers, t0,
                      extra=extra)
 
@@ -657,5 +663,4 @@ def campbell_in_wind(turbine: Turbine, wind_speeds, schedule: dict,
                          "wind_speeds": winds.tolist(), "air_density": rho,
                          "wind_direction_deg": float(np.degrees(direction)),
                          "pitch_deg": [p["pitch_deg"] for p in op],
-                         "aerodynamics": aero_description(inflow, airfoil,
-                                         turbine.aerodynamics.skew_factor)})
+                         "aerodynamics": _aero_description(turbine, inflow, airfoil)})

@@ -442,7 +442,7 @@ def _modal_analysis(turbine, elements, rotor_speed, steps, method, fast, harmoni
                          "wind_direction_deg": float(np.degrees(wind.direction)),
                          "air_density": float(rho),
                          "pitch_deg": float(np.degrees(-turbine.rotor.pitch)),
-                         "aerodynamics": model.aero.description,
+                         "aerodynamics": model.aero_description,
                          "inflow": model.aero.inflow, "airfoil": model.aero.airfoil,
                          "mean_axial_induction": float(np.mean(a))})
     total = time.perf_counter() - t0

@@ -84,15 +84,17 @@ AIRFOIL_MODELS = ("quasi-steady", "jones")
 
 
 def description(inflow: str = "frozen", airfoil: str = "quasi-steady",
-                skew_factor: float = 0.0) -> str:
-    """What the blades' aerodynamic model is, in a result's settings."""
+                skew_factor: float = 0.0, tower_drag: bool = False) -> str:
+    """What the turbine's aerodynamic model is, in a result's settings (``tower_drag``: the
+    flexible tower's drag is on, assembly/tower_aero.py)."""
     wake = ("frozen wake" if inflow == "frozen"
             else "Oye dynamic inflow per blade element")
     foil = ("quasi-steady airfoils" if airfoil == "quasi-steady"
             else "Jones two-state unsteady airfoils (attached flow)")
     skew = (f", Pitt-Peters skewed wake (K = {skew_factor:.4g})" if skew_factor > 0
             else "")
-    return f"blade-element momentum (Prandtl tip/hub loss, Buhl), {wake}{skew}, {foil}"
+    tower = ", tower drag" if tower_drag else ""
+    return f"blade-element momentum (Prandtl tip/hub loss, Buhl), {wake}{skew}, {foil}{tower}"
 
 
 

@@ -32,7 +32,7 @@ from ..numerics.jacobian import (STEP, ColouredJacobian, beam_station_pattern,
 from ..numerics.rotations import cross, rot_T_apply
 from ..rigid import RigidSystem
 from .layout import StateLayout
-from .rotor_aero import RotorAerodynamics
+from .rotor_aero import RotorAerodynamics, description
 from .tower_aero import TowerDrag
 
 __all__ = ["TurbineModel"]
@@ -139,6 +139,14 @@ class TurbineModel:
         (hawt_core.rigid.ControlInputs; None: the blades at the mesh's pitch, no generator
         torque); see RigidSystem.set_controls for the frames and signs."""
         self.rigid.set_controls(controls)
+
+    @property
+    def aero_description(self) -> Optional[str]:
+        """What the aerodynamic model is (rotor_aero.description), None in a vacuum."""
+        if self.aero is None:
+            return None
+        return description(self.aero.inflow, self.aero.airfoil, self.aero.skew_factor,
+                           self.tower_drag is not None)
 
     def set_wind(self, wind: Wind) -> None:
         """Blow ``wind`` from now on (RotorAerodynamics.set_wind); ValueError in a vacuum."""
