@@ -199,6 +199,21 @@ def _averaged_modes(dae: LinearPeriodicDAE, rows, weights):
     return lam, X[rows] * weights[:, None]
 
 
+#: The relative accuracy asked of the Fourier series of the linearization E(t), A(t), as a
+#: share of the periodic steady state's own interpolation tolerance (the orbit it is taken
+#: about is no more accurate): 1e-10 in a vacuum; 1e-8 in wind, where the C1 airfoil tables
+#: make the series decay algebraically (NREL 5-MW at 15 m/s, 4 elements, multi-blade
+#: coordinates: 6.7e-8, 4.0e-9, 1.1e-9, 1.6e-10 with 2, 7, 22, 67 harmonics; 1e-10 was not
+#: reached at the 67 allowed and cost 135 linearizations, 1e-8 takes 15; the exponents below
+#: 50 per-rev move by 4.5e-6 relative, within Hill's 5e-5).
+FOURIER_SHARE = 1e-2
+
+
+def _fourier_tol(model: TurbineModel) -> float:
+    """The relative tolerance of the linearization's Fourier series (FOURIER_SHARE)."""
+    return FOURIER_SHARE * float(model.interpolation_tol)
+
+
 def _monodromy_modes(model: TurbineModel, dae: LinearPeriodicDAE, method: str, steps: int,
                      use_fast: bool, rows, wts, d: int):
     """Floquet by time marching (Radau IIA or the paper's central differencing): the
@@ -208,7 +223,8 @@ def _monodromy_modes(model: TurbineModel, dae: LinearPeriodicDAE, method: str, s
     # to samples / 2 per-rev, so the reported band is also capped at samples / 2.5
     samples = int(min(MAX_SAMPLES, max(128, 2 ** np.ceil(np.log2(2.5 * steps / STEPS_PER_CYCLE[method])))))
     fl = floquet_analysis(dae, method=method, steps=steps, fast=use_fast, samples=samples,
-                          observed=rows, weights=wts ** 2, dynamic_dim=d)
+                          observed=rows, weights=wts ** 2, dynamic_dim=d,
+                          fourier_tol=_fourier_tol(model))
     omega = model.rotor_speed
     limit = min(steps / STEPS_PER_CYCLE[method], samples / 2.5)
     lam0, X0 = _averaged_modes(dae, rows, wts)
@@ -235,7 +251,8 @@ def _monodromy_modes(model: TurbineModel, dae: LinearPeriodicDAE, method: str, s
         # at 1: keep only the modes that an L-stable Radau IIA march (which annihilates
         # unresolved modes) confirms, within 1 % in frequency and 0.01 per-rev in real part.
         ref = floquet_analysis(dae, method="radau", steps=max(128, steps // 4), fast=use_fast,
-                               observed=rows, weights=wts ** 2, dynamic_dim=d)
+                               observed=rows, weights=wts ** 2, dynamic_dim=d,
+                               fourier_tol=_fourier_tol(model))
         keep = [j for j in ref.modes() if abs(ref.multipliers[j]) > 1e-12]
         fr, rr = ref.frequency_per_rev[keep], ref.real_per_rev[keep]
         fi = fl.frequency_per_rev[resolved][:, None]
@@ -276,7 +293,8 @@ def _hill_floquet(model: TurbineModel, dae: LinearPeriodicDAE, transform, max_pe
     # multi-blade coordinates of an isotropic rotor are periodic only through gravity and
     # tilt (weakly): the truncation is chosen by the exponents' convergence (hill_modes)
     hm = hill_modes(dae, max_per_rev * omega, observed=frame_rows, weights=wts ** 2,
-                    truncation="converged" if transform is not None else "tail")
+                    truncation="converged" if transform is not None else "tail",
+                    fourier_tol=_fourier_tol(model))
     M = int(min(MAX_SAMPLES, max(128, 2 ** np.ceil(np.log2(2.5 * max_per_rev)))))
     tm = np.arange(M) * T / M
     lam = hm.exponents
