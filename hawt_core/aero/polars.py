@@ -93,20 +93,59 @@ class StationPolars:
         w = np.where(same, 0.0, w)
         self.curves = [AirfoilCurves.from_polar(p) for p in aero.polars]
         self.first, self.second, self.weight = a0, a1, w
-        # the polars in use and, per polar, the stations (first or second) that use it
-        self._uses = []
-        for j in sorted(set(a0.tolist()) | set(a1[w > 0].tolist())):
-            self._uses.append((j, np.flatnonzero(a0 == j),
-                               np.flatnonzero((a1 == j) & (w > 0))))
+        self._blended = np.flatnonzero(w > 0)
+        self._stack = _StackedTables([c.table for c in self.curves])
 
     def coefficients(self, alpha):
+        """(cl, cd, cm) at the angles of attack ``alpha`` [rad] (last axis: the stations)."""
         alpha = np.asarray(alpha)
-        out = np.zeros((3,) + alpha.shape, dtype=np.result_type(alpha, float))
-        w = self.weight
-        for j, first, second in self._uses:
-            table = self.curves[j].table
-            if first.size:
-                out[..., first] += (1.0 - w[first]) * table(alpha[..., first])
-            if second.size:
-                out[..., second] += w[second] * table(alpha[..., second])
+        out = self._stack(alpha, self.first)
+        b = self._blended
+        if b.size:
+            w = self.weight[b]
+            out[..., b] = (1.0 - w) * out[..., b] + w * self._stack(alpha[..., b],
+                                                                    self.second[b])
         return out[0], out[1], out[2]
+
+
+class _StackedTables:
+    """Several HermiteTables (each its own grid) evaluated in one vectorized pass, each point
+    with the table its station names: the grids are laid end to end, each shifted by its
+    index times a span larger than any grid, so one searchsorted finds every point's
+    interval; the interval is clipped to the point's own table, and beyond its ends the
+    end cubic's tangent continues linearly (HermiteTable's rule)."""
+
+    def __init__(self, tables: Sequence[HermiteTable]):
+        lo = min(float(t.x[0]) for t in tables)
+        hi = max(float(t.x[-1]) for t in tables)
+        self.span = 2.0 * (hi - lo) + 1.0
+        sizes = np.array([t.x.size for t in tables])
+        self.start = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+        self.last = self.start + sizes - 1                       # index of each grid's end
+        self.x = np.concatenate([t.x for t in tables])
+        self.shifted = np.concatenate([t.x + k * self.span for k, t in enumerate(tables)])
+        self.y = np.concatenate([t.y for t in tables], axis=1)   # (3, total)
+        self.d = np.concatenate([t.d for t in tables], axis=1)
+        self.h = np.append(np.diff(self.x), 1.0)                 # only in-grid entries used
+
+    def __call__(self, q, table) -> np.ndarray:
+        """Values (3, *q.shape); ``table`` (q.shape[-1],): the table of each station."""
+        q = np.asarray(q)
+        table = np.broadcast_to(table, q.shape)
+        first, last = self.start[table], self.last[table]
+        key = q.real + table * self.span
+        i = np.clip(np.searchsorted(self.shifted, key, side="right") - 1, first, last - 1)
+        x0, x1, h = self.x[i], self.x[i + 1], self.h[i]
+        t = (q - x0) / h
+        y0, y1 = self.y[:, i], self.y[:, i + 1]
+        d0, d1 = self.d[:, i] * h, self.d[:, i + 1] * h
+        t2 = t * t
+        t3 = t2 * t
+        out = (y0 * (2 * t3 - 3 * t2 + 1) + d0 * (t3 - 2 * t2 + t)
+               + y1 * (-2 * t3 + 3 * t2) + d1 * (t3 - t2))
+        below, above = q.real < self.x[first], q.real > self.x[last]
+        if np.any(below) or np.any(above):
+            lo = self.y[:, first] + self.d[:, first] * (q - self.x[first])
+            hi = self.y[:, last] + self.d[:, last] * (q - self.x[last])
+            out = np.where(below, lo, np.where(above, hi, out))
+        return out
