@@ -22,6 +22,15 @@ from scipy.interpolate import PchipInterpolator
 __all__ = ["HermiteTable", "AirfoilCurves", "StationPolars"]
 
 
+def _hermite_cubic(t, y0, y1, d0, d1):
+    """The cubic Hermite interpolant at the interval coordinate t in [0, 1] from the end
+    values y0, y1 and the end slopes times the interval length d0, d1."""
+    t2 = t * t
+    t3 = t2 * t
+    return (y0 * (2 * t3 - 3 * t2 + 1) + d0 * (t3 - 2 * t2 + t)
+            + y1 * (-2 * t3 + 3 * t2) + d1 * (t3 - t2))
+
+
 class HermiteTable:
     """Several curves y_k(x) on one grid x (strictly increasing), as one C1 piecewise-cubic
     Hermite interpolant each (PCHIP slopes); ``__call__`` evaluates all of them at once."""
@@ -49,10 +58,7 @@ class HermiteTable:
         y0, y1 = self.y[:, i], self.y[:, i + 1]
         d0, d1 = self.d[:, i] * h[i], self.d[:, i + 1] * h[i]
         inside = (q.real >= x[0]) & (q.real <= x[-1])
-        t2 = t * t
-        t3 = t2 * t
-        cubic = (y0 * (2 * t3 - 3 * t2 + 1) + d0 * (t3 - 2 * t2 + t)
-                 + y1 * (-2 * t3 + 3 * t2) + d1 * (t3 - t2))
+        cubic = _hermite_cubic(t, y0, y1, d0, d1)
         if np.all(inside):
             return cubic
         # beyond the ends: the end value plus the end slope times the distance
@@ -135,14 +141,9 @@ class _StackedTables:
         first, last = self.start[table], self.last[table]
         key = q.real + table * self.span
         i = np.clip(np.searchsorted(self.shifted, key, side="right") - 1, first, last - 1)
-        x0, x1, h = self.x[i], self.x[i + 1], self.h[i]
-        t = (q - x0) / h
-        y0, y1 = self.y[:, i], self.y[:, i + 1]
-        d0, d1 = self.d[:, i] * h, self.d[:, i + 1] * h
-        t2 = t * t
-        t3 = t2 * t
-        out = (y0 * (2 * t3 - 3 * t2 + 1) + d0 * (t3 - 2 * t2 + t)
-               + y1 * (-2 * t3 + 3 * t2) + d1 * (t3 - t2))
+        h = self.h[i]
+        out = _hermite_cubic((q - self.x[i]) / h, self.y[:, i], self.y[:, i + 1],
+                             self.d[:, i] * h, self.d[:, i + 1] * h)
         below, above = q.real < self.x[first], q.real > self.x[last]
         if np.any(below) or np.any(above):
             lo = self.y[:, first] + self.d[:, first] * (q - self.x[first])
