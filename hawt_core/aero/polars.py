@@ -130,12 +130,13 @@ class _StackedTables:
         self.last = self.start + sizes - 1                       # index of each grid's end
         self.x = np.concatenate([t.x for t in tables])
         self.shifted = np.concatenate([t.x + k * self.span for k, t in enumerate(tables)])
-        self.y = np.concatenate([t.y for t in tables], axis=1)   # (3, total)
+        self.y = np.concatenate([t.y for t in tables], axis=1)   # (m, total)
         self.d = np.concatenate([t.d for t in tables], axis=1)
         self.h = np.append(np.diff(self.x), 1.0)                 # only in-grid entries used
 
     def __call__(self, q, table) -> np.ndarray:
-        """Values (3, *q.shape); ``table`` (q.shape[-1],): the table of each station."""
+        """Values (m, *q.shape), m the tables' curves (cl, cd, cm); ``table``
+        (q.shape[-1],): the table of each station."""
         q = np.asarray(q)
         table = np.broadcast_to(table, q.shape)
         first, last = self.start[table], self.last[table]
