@@ -48,6 +48,7 @@ from scipy.optimize import linear_sum_assignment
 from ..assembly.rotor_aero import description as aero_description
 from ..model import Turbine
 from ..numerics.mac import mac_matrix
+from ..numerics.threads import solver_threads
 from ..results.campbell import FRAMES, CampbellResult, Track
 from ..results.plotting import mode_label
 from .modal import (DEFAULT_MAX_PER_REV, DEFAULT_STEPS, MAX_STEPS, STEPS_PER_CYCLE,
@@ -118,8 +119,9 @@ def campbell_point(task: dict) -> dict:
     ``task``: ``{"turbine": Turbine, "speed": float [rad/s], "elements", "steps", "method",
     "parent_pid": int}``, and for a sweep in wind ``"wind"`` (aero.wind.Wind), ``"rho"``,
     ``"inflow"``, ``"airfoil"`` (modal_analysis's) and
-    ``"abscissa"`` (the wind speed: the sweep's variable, default the rotor speed).  Top-level and picklable (the analysis limits its BLAS threads
-    itself: hawt_core.threads).
+    ``"abscissa"`` (the wind speed: the sweep's variable, default the rotor speed), and
+    ``"solver_threads"`` (default 1: the sweep runs a point per CPU).  Top-level and
+    picklable (the analysis limits its BLAS threads itself: numerics/threads.py).
 
     Returns ``{"speed", "modes": [mode dict + "label", ...], "vectors": complex (m, n_modes)
     (x(0) on the display rows, tip metres), "harmonics": complex (2K+1, m, n_modes) (Fourier
@@ -128,7 +130,10 @@ def campbell_point(task: dict) -> dict:
     """
     pid = os.getpid()
     import warnings
-    with warnings.catch_warnings(record=True) as caught:
+    # the sweep runs a point per CPU already: one solver thread per point (``"solver_threads"``
+    # overrides it)
+    with warnings.catch_warnings(record=True) as caught, \
+            solver_threads(int(task.get("solver_threads", 1))):
         warnings.simplefilter("always")
         res = modal_analysis(task["turbine"], elements=task.get("elements"),
                              rotor_speed=float(task["speed"]), steps=task.get("steps"),

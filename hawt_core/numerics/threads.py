@@ -8,6 +8,13 @@ real-time factor 7.5-9.3 against 17.9).  So hawt's analyses run with one BLAS th
 default, whatever the environment says; ``HAWT_BLAS_THREADS=k`` chooses another count
 (``0``: leave the libraries' own setting).
 
+Independent sparse eigen searches (Hill's windows and per-mode refinements: SuperLU and
+ARPACK release the GIL) run on a few Python threads instead: ``solver_thread_count()``, from
+HAWT_SOLVER_THREADS, default the CPUs this process may use; ``solver_threads(n)`` sets it
+inside a block (a sweep's worker processes, one per CPU already, use 1; the ROS node's
+analysis worker leaves a CPU to the publishing process); ``thread_map(f, items)`` maps on
+them, in order.
+
 ``blas_threads()`` is a context manager (entered per analysis or per simulation step: about
 10 us, a cached threadpoolctl controller); ``limit_blas_threads(n)`` sets the limit for the
 rest of the process (worker processes of a sweep).
@@ -61,3 +68,53 @@ def limit_blas_threads(n=None) -> int:
     ctl = _controller()
     ctl.limit(limits=n, user_api="blas")
     return len(ctl.select(user_api="blas").lib_controllers)
+
+
+_SOLVER_THREADS = None       # set by solver_threads(): overrides the environment
+
+
+def solver_thread_count() -> int:
+    """Threads for independent sparse solves: the innermost :func:`solver_threads` value,
+    else HAWT_SOLVER_THREADS (an integer >= 1), else the CPUs this process may run on."""
+    if _SOLVER_THREADS is not None:
+        return _SOLVER_THREADS
+    text = os.environ.get("HAWT_SOLVER_THREADS", "").strip()
+    if text:
+        try:
+            n = int(text)
+        except ValueError:
+            n = 0
+        if n < 1:
+            raise ValueError(f"HAWT_SOLVER_THREADS: {text!r} is not allowed; need an integer "
+                             ">= 1")
+        return n
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:          # not on Linux
+        return max(1, os.cpu_count() or 1)
+
+
+@contextlib.contextmanager
+def solver_threads(n: int):
+    """Context manager: :func:`solver_thread_count` is ``n`` (>= 1) inside."""
+    global _SOLVER_THREADS
+    n = int(n)
+    if n < 1:
+        raise ValueError(f"solver threads: {n} is not allowed; need an integer >= 1")
+    previous, _SOLVER_THREADS = _SOLVER_THREADS, n
+    try:
+        yield n
+    finally:
+        _SOLVER_THREADS = previous
+
+
+def thread_map(fn, items) -> list:
+    """``[fn(x) for x in items]``, on up to :func:`solver_thread_count` threads (in order;
+    the first exception is raised). For calls that spend their time outside the GIL."""
+    items = list(items)
+    n = min(solver_thread_count(), len(items))
+    if n <= 1:
+        return [fn(x) for x in items]
+    from concurrent.futures import ThreadPoolExecutor
+    with ThreadPoolExecutor(max_workers=n, thread_name_prefix="hawt-solver") as pool:
+        return list(pool.map(fn, items))

@@ -35,6 +35,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..numerics.pencil import finite_modes, refine_eigenpairs
+from ..numerics.threads import thread_map
 from .floquet import FourierCoefficients, LinearPeriodicDAE, dominant_harmonic
 
 #: Largest eigenvalue count asked of ARPACK in one window before the window is halved.
@@ -179,14 +180,17 @@ class _ShiftInvert:
 
 
 def _window_eigs(Ah, Eh, lo: float, hi: float, stats: dict, depth: int = 0,
-                 re_lo: Optional[float] = None, re_hi: Optional[float] = None):
+                 re_lo: Optional[float] = None, re_hi: Optional[float] = None,
+                 with_stats: bool = False):
     """Eigenpairs of the pencil (Ah, Eh) in the box lo <= Im <= hi, re_lo <= Re <= re_hi
     (default |Re| <= (hi - lo) / 2): ARPACK's k eigenvalues nearest the box centre, k doubled
     until the farthest of them lies outside the box's circumscribed circle; a window that
     needs more than MAX_PER_WINDOW is halved across its longer side (both halves searched;
     in Re the left half open at its right edge): many non-oscillatory exponents on the real
     axis (the blades' inflow and lag states and their Hill copies at Im = k w) fill a window
-    that only a split in Re thins."""
+    that only a split in Re thins.  ``with_stats``: return ``stats`` as a third item."""
+    if with_stats:
+        return (*_window_eigs(Ah, Eh, lo, hi, stats, depth, re_lo, re_hi), stats)
     N = Ah.shape[0]
     c = 0.5 * (lo + hi)
     r = 0.5 * (hi - lo)
@@ -238,9 +242,20 @@ def _band_eigs(Ah, Eh, hi: float, width: float, stats: dict):
         return refine_eigenpairs(Ah, Eh, lam[sel], X[:, sel])
     count = max(1, int(math.ceil(hi / width)))
     edges = np.linspace(0.0, hi, count + 1)
-    parts = [_window_eigs(Ah, Eh, a, b, stats) for a, b in zip(edges[:-1], edges[1:])]
+    # the windows are independent: searched on the solver threads (numerics/threads.py),
+    # each counting its own factorizations and solves
+    parts = thread_map(lambda ab: _window_eigs(Ah, Eh, ab[0], ab[1], {}, with_stats=True),
+                       list(zip(edges[:-1], edges[1:])))
+    _add_stats(stats, [p[2] for p in parts])
     return (np.concatenate([p[0] for p in parts]),
             np.concatenate([p[1] for p in parts], axis=1))
+
+
+def _add_stats(stats: dict, parts) -> None:
+    """Add the counts of ``parts`` (dicts) into ``stats``."""
+    for part in parts:
+        for key, value in part.items():
+            stats[key] = stats.get(key, 0) + value
 
 
 def _real_pencil_band(A, E, max_frequency: float, stats: dict):
@@ -458,12 +473,17 @@ def _refine(Ah, Eh, pending, H, n, obs, wts, w, stats):
     """[(eta, V (2H+1, n), tail)] of each pending mode at truncation H: the centred
     eigenvalue nearest its last value among the TARGETED_K nearest a shift beside it; None
     when one is not found within w / 4 or two modes land on the same one."""
-    out = []
-    for eta, *_ in pending:
-        si = _ShiftInvert(Ah, Eh, complex(eta) + 1e-4 * w, stats,
+    def nearest(eta):          # one mode: its own factorization (on the solver threads)
+        own: dict = {}
+        si = _ShiftInvert(Ah, Eh, complex(eta) + 1e-4 * w, own,
                           f"Hill's method refining the exponent {eta:.4g}")
         lam, X = si.nearest(min(TARGETED_K, Ah.shape[0] - 2))
-        cl, cV, ct = _centred(lam, X, H, n, obs, wts, w)
+        return _centred(lam, X, H, n, obs, wts, w), own
+
+    found = thread_map(nearest, [p[0] for p in pending])
+    _add_stats(stats, [f[1] for f in found])
+    out = []
+    for (eta, *_), ((cl, cV, ct), _) in zip(pending, found):
         if not cl.size:
             return None
         j = int(np.argmin(np.abs(cl - eta)))

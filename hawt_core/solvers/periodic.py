@@ -10,9 +10,19 @@ Jacobian ``blockdiag(dR/dy_j) + blockdiag(dR/dydot_j) (D kron I)``.
 Ignorable coordinates (a free yaw angle with no spring: its column of dR/dy is zero) have an
 arbitrary mean; it is held at its initial value by a unit diagonal regularization (it changes
 the Newton path, not the solution).
+
+Identical, equally spaced blades (an odd number Nb >= 3 of them): the residual has the blade
+relabelling symmetry ``R(S ydot, S y, t + T/Nb) = S R(ydot, y, t)`` (assembly/turbine.py
+blade_relabelling), so the periodic steady state satisfies ``y(t + T/Nb) = S y(t)`` (if y
+solves, so does ``S y(t - T/Nb)``; the steady state is that unique solution). The unknowns
+are then the samples in the first 1/Nb of the period only (M divisible by Nb), the others
+``y_{j + l M/Nb} = S^l y_j``, and the residual is imposed there: Nb times fewer Jacobians and
+unknowns for the same harmonics (the symmetry is checked on the residual first; see
+_relabelling_symmetry).
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Optional
 
@@ -90,7 +100,8 @@ def periodic_steady_state(model, harmonics: int = 8, tol: float = 1e-9, max_iter
                           max_harmonics: int = 48) -> PeriodicSteadyState:
     """Steady state of ``model`` (a TurbineModel): the constant one when it exists (no
     gravity, tilt or asymmetry), otherwise the periodic one by harmonic balance, starting with
-    ``harmonics`` harmonics and doubling them (up to ``max_harmonics``) until the residual
+    ``harmonics`` harmonics and doubling them (up to ``max_harmonics``; 1.5 times with the
+    blade-relabelling symmetry, see the module docstring) until the residual
     between the collocation times is below ``interpolation_tol`` relative to the load scale
     (default the model's ``interpolation_tol``, else INTERPOLATION_TOL).
     Raises ConvergenceError when Newton does not converge."""
@@ -108,24 +119,69 @@ def periodic_steady_state(model, harmonics: int = 8, tol: float = 1e-9, max_iter
     T = model.period
     scale = model.load_scale()
     guess = None
-    H = int(harmonics)
+    symmetry = _relabelling_symmetry(model)
+    H = int(harmonics) if symmetry is None else _symmetric_harmonics(int(harmonics),
+                                                                      symmetry[1])
     try:
-        guess = _harmonic_balance(model, H, tol, max_iter, progress, None)
+        guess = _harmonic_balance(model, H, tol, max_iter, progress, None, symmetry)
     except ConvergenceError as exc:
-        guess = _continuation(model, H, tol, max_iter, progress, exc)
+        guess = _continuation(model, H, tol, max_iter, progress, exc, symmetry)
     while True:
         ps = guess if guess.harmonics == H else _harmonic_balance(model, H, tol, max_iter,
-                                                                  progress, guess)
+                                                                  progress, guess, symmetry)
         mids = (np.arange(2 * H + 1) + 0.5) * T / (2 * H + 1)
         err = max(np.abs(model.residual(ps.rate_at(t), ps.at(t), t)).max() for t in mids[::3])
         ps.interpolation_error = float(err / scale)
-        if ps.interpolation_error <= interpolation_tol or 2 * H > max_harmonics:
+        # with the symmetry the next truncation is 1.5 H rounded up to one whose sample count
+        # Nb divides (unknowns and Jacobians grow with (2H + 1) / Nb only)
+        H_next = (2 * H if symmetry is None
+                  else _symmetric_harmonics(int(math.ceil(1.5 * H)), symmetry[1]))
+        if ps.interpolation_error <= interpolation_tol or H_next > max_harmonics:
             if ps.interpolation_error > interpolation_tol:
                 warnings.warn(f"periodic steady state: residual between collocation times "
                               f"{ps.interpolation_error:.1e} (relative) with {H} harmonics",
                               RuntimeWarning, stacklevel=2)
             return ps
-        guess, H = ps, 2 * H
+        guess, H = ps, H_next
+
+
+#: Largest relative difference between ``R(S ydot, S y, t + T/Nb)`` and ``S R(ydot, y, t)``
+#: (relative to the load scale) at which the harmonic balance uses the blade-relabelling
+#: symmetry; round-off is ~1e-15 of it, a blade that differs from the others far more.
+SYMMETRY_CHECK_TOL = 1e-10
+
+
+def _relabelling_symmetry(model):
+    """(S, Nb) when the harmonic balance may use the blade-relabelling symmetry: an odd
+    number Nb >= 3 of blades (an odd sample count M = 2H + 1 must be divisible by Nb), the
+    model declaring S, and the residual obeying ``R(S ydot, S y, t + T/Nb) = S R(ydot, y,
+    t)`` at a perturbed state and rate (a fixed pseudo-random perturbation of the initial
+    guess, so that stiffness, mass and aerodynamic terms all take part) to
+    SYMMETRY_CHECK_TOL of the load scale; else None (the whole period is collocated)."""
+    Nb = int(getattr(model, "n_blades", 1))
+    if Nb < 3 or Nb % 2 == 0 or not hasattr(model, "blade_relabelling"):
+        return None
+    try:
+        S = sp.csr_matrix(model.blade_relabelling())
+    except ValueError:
+        return None
+    rng = np.random.default_rng(20261204)
+    y = model.initial_guess() + 1e-6 * rng.standard_normal(model.n)
+    yd = 1e-6 * rng.standard_normal(model.n)
+    t = 0.3 * model.period
+    lhs = model.residual(S @ yd, S @ y, t + model.period / Nb)
+    rhs = S @ model.residual(yd, y, t)
+    if not np.all(np.isfinite(lhs)) or \
+            np.abs(lhs - rhs).max() > SYMMETRY_CHECK_TOL * model.load_scale():
+        return None
+    return S, Nb
+
+
+def _symmetric_harmonics(H: int, Nb: int) -> int:
+    """The smallest truncation >= H whose sample count 2H + 1 is divisible by Nb (odd)."""
+    while (2 * H + 1) % Nb:
+        H += 1
+    return H
 
 
 #: Continuation: the first homotopy parameter, and the smallest step factor before giving up.
@@ -148,7 +204,7 @@ def homotopy_turbine(turbine, lam: float):
     return out
 
 
-def _continuation(model, harmonics, tol, max_iter, progress, first_error):
+def _continuation(model, harmonics, tol, max_iter, progress, first_error, symmetry=None):
     """Harmonic balance by natural-parameter continuation from a weakly forced turbine
     (homotopy_turbine at CONTINUATION_START) to the turbine itself, each solution the next
     one's starting guess; the step (a factor on lam) grows after a success and shrinks after
@@ -162,7 +218,7 @@ def _continuation(model, harmonics, tol, max_iter, progress, first_error):
         if progress is not None:
             progress(0.5, f"periodic steady state: continuation at {lam:.3g}")
         try:
-            ps = _harmonic_balance(m, harmonics, tol, max_iter, None, guess)
+            ps = _harmonic_balance(m, harmonics, tol, max_iter, None, guess, symmetry)
         except ConvergenceError:
             if last is None or step < CONTINUATION_MIN_STEP:
                 where = "its start" if last is None else f"{last:.4g}"
@@ -223,7 +279,34 @@ class _AveragedPreconditioner:
         return np.concatenate([T @ q[j] for j, T in enumerate(self.T)])
 
 
-def _harmonic_balance(model, harmonics, tol, max_iter, progress, guess) -> PeriodicSteadyState:
+def _symmetric_differentiation(D: np.ndarray, S, Nb: int) -> sp.csr_matrix:
+    """The Fourier differentiation of the reduced samples: ``ydot_j = sum_l sum_i
+    D[j, i + l m] S^l y_i`` for j, i < m = M / Nb (the sample at ``t_i + l T / Nb`` is
+    ``S^l y_i``), as one sparse (m n, m n) matrix."""
+    M = D.shape[0]
+    m = M // Nb
+    n = S.shape[0]
+    Sl = sp.identity(n, format="csr")
+    out = None
+    for l in range(Nb):
+        part = sp.kron(sp.csr_matrix(D[:m, l * m:(l + 1) * m]), Sl, format="csr")
+        out = part if out is None else out + part
+        Sl = (S @ Sl).tocsr()
+    return out
+
+
+def _expand(Yr: np.ndarray, S, Nb: int) -> np.ndarray:
+    """The samples over the whole period (M, n) from those over its first 1/Nb (m, n):
+    block l is ``S^l`` applied to the reduced samples."""
+    blocks, Z = [Yr], Yr
+    for _ in range(1, Nb):
+        Z = (S @ Z.T).T
+        blocks.append(Z)
+    return np.concatenate(blocks)
+
+
+def _harmonic_balance(model, harmonics, tol, max_iter, progress, guess,
+                      symmetry=None) -> PeriodicSteadyState:
     M = 2 * harmonics + 1
     T = model.period
     times = np.arange(M) * T / M
@@ -231,12 +314,26 @@ def _harmonic_balance(model, harmonics, tol, max_iter, progress, guess) -> Perio
     n = model.n
     Y = np.tile(model.initial_guess(), (M, 1)) if guess is None \
         else np.array([guess.at(t) for t in times])
-    KD = sp.kron(sp.csr_matrix(D), sp.identity(n), format="csr")
+    if symmetry is not None:
+        # the unknowns are the samples over the first 1/Nb of the period (module docstring)
+        S, Nb = symmetry
+        if M % Nb:
+            raise ValueError(f"harmonic balance: {M} samples are not divisible by {Nb} blades")
+        m = M // Nb
+        KD = _symmetric_differentiation(D, S, Nb)
+        Y = Y[:m]
+    else:
+        m = M
+        KD = sp.kron(sp.csr_matrix(D), sp.identity(n), format="csr")
+    t_col = times[:m]                 # collocation times
+
+    def rates(Y):
+        return (KD @ Y.ravel()).reshape(m, n)
 
     def residual(Yflat):
-        Y = Yflat.reshape(M, n)
-        Yd = D @ Y
-        r = np.concatenate([model.residual(Yd[j], Y[j], times[j]) for j in range(M)])
+        Y = Yflat.reshape(m, n)
+        Yd = rates(Y)
+        r = np.concatenate([model.residual(Yd[j], Y[j], t_col[j]) for j in range(m)])
         if progress is not None:
             progress(0.5, f"harmonic balance ({harmonics} harmonics): residual {np.abs(r).max():.2e}")
         return r
@@ -244,19 +341,22 @@ def _harmonic_balance(model, harmonics, tol, max_iter, progress, guess) -> Perio
     blocks = {}
 
     def jacobian(Yflat):
-        Y = Yflat.reshape(M, n)
-        Yd = D @ Y
-        jy, jd = zip(*(model.jacobians(Yd[j], Y[j], times[j]) for j in range(M)))
+        Y = Yflat.reshape(m, n)
+        Yd = rates(Y)
+        jy, jd = zip(*(model.jacobians(Yd[j], Y[j], t_col[j]) for j in range(m)))
         blocks["jy"], blocks["jd"] = jy, jd
         return (sp.block_diag(jy, format="csr") + sp.block_diag(jd, format="csr") @ KD).tocsc()
 
     def krylov(J, r):
         """GMRES on J dy = r with the averaged preconditioner; None (-> sparse LU) if it
         does not reach its tolerance."""
-        if M * n <= ITERATIVE_UNKNOWNS or model.n_blades < 3:
+        if m * n <= ITERATIVE_UNKNOWNS or model.n_blades < 3:
             return None      # small, or one or two blades: strongly periodic, the LU wins
         if blocks.get("preconditioned") is not J:     # Newton keeps J while it contracts
-            blocks["pre"] = _AveragedPreconditioner(model, blocks["jy"], blocks["jd"], times, T)
+            # with the symmetry, multi-blade coordinates are periodic with T / Nb: the
+            # preconditioner works on the reduced samples as a period of its own
+            blocks["pre"] = _AveragedPreconditioner(model, blocks["jy"], blocks["jd"], t_col,
+                                                    T * m / M)
             blocks["preconditioned"] = J
         pre = blocks["pre"]
         P = spl.LinearOperator(J.shape, matvec=pre.solve, dtype=float)
@@ -276,6 +376,9 @@ def _harmonic_balance(model, harmonics, tol, max_iter, progress, guess) -> Perio
                        # the chord method where each Jacobian is dear (GMRES-sized systems);
                        # small ones keep Newton's quadratic last step (a steady state far
                        # below the tolerance, whose symmetry Fast Floquet relies on)
-                       reuse_jacobian=M * n > ITERATIVE_UNKNOWNS and model.n_blades >= 3)
-    return PeriodicSteadyState(times=times, states=Yflat.reshape(M, n), period=T, iterations=it,
+                       reuse_jacobian=m * n > ITERATIVE_UNKNOWNS and model.n_blades >= 3)
+    states = Yflat.reshape(m, n)
+    if symmetry is not None:
+        states = _expand(states, *symmetry)
+    return PeriodicSteadyState(times=times, states=states, period=T, iterations=it,
                                harmonics=harmonics)
