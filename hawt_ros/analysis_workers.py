@@ -179,20 +179,24 @@ def _worker_main(conn, turbine, kwargs, cancel_event, node_pid) -> None:
         except (OSError, ValueError):
             pass
 
+    from hawt_core.numerics.threads import solver_thread_count, solver_threads
     try:
         t0 = time.perf_counter()
-        if kwargs.get("wind_speed"):
-            # the node runs in wind: the aeroelastic analysis at its operating point
-            from hawt_core.analyses.modal import modal_at_operating_point
-            kw = dict(kwargs)
-            result = modal_at_operating_point(
-                turbine, kw.pop("wind_speed"), kw.pop("discon"),
-                wind_direction=kw.pop("wind_direction", 0.0),
-                rotor_speed=kw.pop("rotor_speed", None) or None, progress=progress,
-                cancel=cancel_event.is_set, **kw)
-        else:
-            result = be.modal_analysis(turbine, progress=progress, cancel=cancel_event.is_set,
-                                       **kwargs)
+        # one CPU stays with the node's real-time simulation: the analysis' solver threads
+        # (Hill's windows) use the others, at least one
+        with solver_threads(max(1, solver_thread_count() - 1)):
+            if kwargs.get("wind_speed"):
+                # the node runs in wind: the aeroelastic analysis at its operating point
+                from hawt_core.analyses.modal import modal_at_operating_point
+                kw = dict(kwargs)
+                result = modal_at_operating_point(
+                    turbine, kw.pop("wind_speed"), kw.pop("discon"),
+                    wind_direction=kw.pop("wind_direction", 0.0),
+                    rotor_speed=kw.pop("rotor_speed", None) or None, progress=progress,
+                    cancel=cancel_event.is_set, **kw)
+            else:
+                result = be.modal_analysis(turbine, progress=progress,
+                                           cancel=cancel_event.is_set, **kwargs)
         plain = result_to_plain(result)
         if not math.isfinite(plain["compute_time"]):
             plain["compute_time"] = time.perf_counter() - t0

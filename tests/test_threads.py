@@ -22,6 +22,30 @@ def test_thread_map_keeps_order_and_raises():
             thread_map(lambda x: 1 / x, [1, 0, 2])
 
 
+def test_the_override_belongs_to_the_calling_thread():
+    """Reference: concurrent analyses on threads of one process (a sweep on a thread pool):
+    one thread's solver_threads(1) is not seen by another, and each is restored on exit
+    whatever the order the threads leave in."""
+    import threading
+    inside, release, seen = threading.Event(), threading.Event(), []
+
+    def other():
+        with solver_threads(5):
+            inside.set()
+            release.wait(5)
+            seen.append(solver_thread_count())
+
+    worker = threading.Thread(target=other)
+    worker.start()
+    inside.wait(5)
+    with solver_threads(1):
+        release.set()
+        worker.join(5)
+        assert solver_thread_count() == 1
+    assert seen == [5]
+    assert getattr(threads._LOCAL, "n", None) is None
+
+
 def test_solver_thread_count_from_the_environment(monkeypatch):
     """Reference: the documented rules (environment, context, bad values named)."""
     monkeypatch.setenv("HAWT_SOLVER_THREADS", "3")
@@ -68,4 +92,4 @@ def test_hill_on_two_threads_equals_one():
     assert (np.abs(two.exponents - one.exponents) / scale).max() < 1e-10
     # (solve counts vary with ARPACK's random start vectors, run to run)
     assert two.timings["factorizations"] == one.timings["factorizations"] >= 3
-    assert threads._SOLVER_THREADS is None
+    assert getattr(threads._LOCAL, "n", None) is None       # restored on exit

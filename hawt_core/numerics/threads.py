@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import threading
 
 _CONTROLLER = None
 
@@ -70,14 +71,18 @@ def limit_blas_threads(n=None) -> int:
     return len(ctl.select(user_api="blas").lib_controllers)
 
 
-_SOLVER_THREADS = None       # set by solver_threads(): overrides the environment
+# solver_threads() overrides the environment per calling thread (analyses run concurrently
+# on threads of one process: a sweep on a thread pool, the tests)
+_LOCAL = threading.local()
 
 
 def solver_thread_count() -> int:
-    """Threads for independent sparse solves: the innermost :func:`solver_threads` value,
-    else HAWT_SOLVER_THREADS (an integer >= 1), else the CPUs this process may run on."""
-    if _SOLVER_THREADS is not None:
-        return _SOLVER_THREADS
+    """Threads for independent sparse solves: the innermost :func:`solver_threads` value of
+    the calling thread, else HAWT_SOLVER_THREADS (an integer >= 1), else the CPUs this
+    process may run on."""
+    n = getattr(_LOCAL, "n", None)
+    if n is not None:
+        return n
     text = os.environ.get("HAWT_SOLVER_THREADS", "").strip()
     if text:
         try:
@@ -96,16 +101,17 @@ def solver_thread_count() -> int:
 
 @contextlib.contextmanager
 def solver_threads(n: int):
-    """Context manager: :func:`solver_thread_count` is ``n`` (>= 1) inside."""
-    global _SOLVER_THREADS
+    """Context manager: :func:`solver_thread_count` is ``n`` (>= 1) inside, in the calling
+    thread."""
     n = int(n)
     if n < 1:
         raise ValueError(f"solver threads: {n} is not allowed; need an integer >= 1")
-    previous, _SOLVER_THREADS = _SOLVER_THREADS, n
+    previous = getattr(_LOCAL, "n", None)
+    _LOCAL.n = n
     try:
         yield n
     finally:
-        _SOLVER_THREADS = previous
+        _LOCAL.n = previous
 
 
 def thread_map(fn, items) -> list:
