@@ -180,17 +180,14 @@ class _ShiftInvert:
 
 
 def _window_eigs(Ah, Eh, lo: float, hi: float, stats: dict, depth: int = 0,
-                 re_lo: Optional[float] = None, re_hi: Optional[float] = None,
-                 with_stats: bool = False):
+                 re_lo: Optional[float] = None, re_hi: Optional[float] = None):
     """Eigenpairs of the pencil (Ah, Eh) in the box lo <= Im <= hi, re_lo <= Re <= re_hi
     (default |Re| <= (hi - lo) / 2): ARPACK's k eigenvalues nearest the box centre, k doubled
     until the farthest of them lies outside the box's circumscribed circle; a window that
     needs more than MAX_PER_WINDOW is halved across its longer side (both halves searched;
     in Re the left half open at its right edge): many non-oscillatory exponents on the real
     axis (the blades' inflow and lag states and their Hill copies at Im = k w) fill a window
-    that only a split in Re thins.  ``with_stats``: return ``stats`` as a third item."""
-    if with_stats:
-        return (*_window_eigs(Ah, Eh, lo, hi, stats, depth, re_lo, re_hi), stats)
+    that only a split in Re thins."""
     N = Ah.shape[0]
     c = 0.5 * (lo + hi)
     r = 0.5 * (hi - lo)
@@ -242,10 +239,12 @@ def _band_eigs(Ah, Eh, hi: float, width: float, stats: dict):
         return refine_eigenpairs(Ah, Eh, lam[sel], X[:, sel])
     count = max(1, int(math.ceil(hi / width)))
     edges = np.linspace(0.0, hi, count + 1)
-    # the windows are independent: searched on the solver threads (numerics/threads.py),
-    # each counting its own factorizations and solves
-    parts = thread_map(lambda ab: _window_eigs(Ah, Eh, ab[0], ab[1], {}, with_stats=True),
-                       list(zip(edges[:-1], edges[1:])))
+    def window(edge):          # one window, counting its own factorizations and solves
+        own: dict = {}
+        return (*_window_eigs(Ah, Eh, edge[0], edge[1], own), own)
+
+    # the windows are independent: searched on the solver threads (numerics/threads.py)
+    parts = thread_map(window, list(zip(edges[:-1], edges[1:])))
     _add_stats(stats, [p[2] for p in parts])
     return (np.concatenate([p[0] for p in parts]),
             np.concatenate([p[1] for p in parts], axis=1))
