@@ -7,6 +7,8 @@ References and tolerances (each test says which):
   factorizations (one per window);
 - thread_map keeps the order of its items and raises the first exception.
 """
+import warnings
+
 import numpy as np
 import pytest
 
@@ -82,10 +84,13 @@ def test_hill_on_two_threads_equals_one():
     model = TurbineModel(t, elements=3)
     dae = periodic_dae(model, periodic_steady_state(model))
     band = 6.0 * model.rotor_speed
-    with solver_threads(1):
-        one = hill_modes(dae, band, harmonics=4)
-    with solver_threads(2):
-        two = hill_modes(dae, band, harmonics=4)
+    with warnings.catch_warnings():
+        # 4 harmonics leave 7e-11 of a mode's energy in the outermost: warned, the same twice
+        warnings.simplefilter("ignore", RuntimeWarning)
+        with solver_threads(1):
+            one = hill_modes(dae, band, harmonics=4)
+        with solver_threads(2):
+            two = hill_modes(dae, band, harmonics=4)
     assert one.exponents.size >= 6
     assert two.exponents.size == one.exponents.size
     scale = np.maximum(np.abs(one.exponents), model.rotor_speed)
