@@ -338,14 +338,15 @@ def cmd_play(args) -> int:
         with _Stop() as stop:
             if args.wait_for_subscribers:
                 deadline = time.monotonic() + args.wait_for_subscribers
-                while not stop and time.monotonic() < deadline and \
-                        not all(p.get_subscription_count() > 0 for p in pubs.values()):
+                while not stop and time.monotonic() < deadline:
+                    if all(p.get_subscription_count() > 0 for p in pubs.values()):
+                        # the graph shows a subscriber once this side has discovered it; its
+                        # side may match our writers later, and a reliable reader then gets
+                        # the first samples repaired in one burst (seen in CI: median gap
+                        # 6 ms instead of 50): settle
+                        time.sleep(PLAY_SETTLE_S)
+                        break
                     time.sleep(0.02)
-                # the graph shows a subscriber once this side has discovered it; its side may
-                # match our writers later, and a reliable reader then gets the first samples
-                # repaired in one burst (seen in CI: median gap 6 ms instead of 50): settle
-                if not stop and all(p.get_subscription_count() > 0 for p in pubs.values()):
-                    time.sleep(PLAY_SETTLE_S)
             while not stop:
                 first = None
                 start = time.monotonic()

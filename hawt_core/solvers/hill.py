@@ -239,6 +239,7 @@ def _band_eigs(Ah, Eh, hi: float, width: float, stats: dict):
         return refine_eigenpairs(Ah, Eh, lam[sel], X[:, sel])
     count = max(1, int(math.ceil(hi / width)))
     edges = np.linspace(0.0, hi, count + 1)
+
     def window(edge):          # one window, counting its own factorizations and solves
         own: dict = {}
         return (*_window_eigs(Ah, Eh, edge[0], edge[1], own), own)

@@ -312,8 +312,6 @@ def _harmonic_balance(model, harmonics, tol, max_iter, progress, guess,
     times = np.arange(M) * T / M
     D = fourier_differentiation(M, T)
     n = model.n
-    Y = np.tile(model.initial_guess(), (M, 1)) if guess is None \
-        else np.array([guess.at(t) for t in times])
     if symmetry is not None:
         # the unknowns are the samples over the first 1/Nb of the period (module docstring)
         S, Nb = symmetry
@@ -321,11 +319,12 @@ def _harmonic_balance(model, harmonics, tol, max_iter, progress, guess,
             raise ValueError(f"harmonic balance: {M} samples are not divisible by {Nb} blades")
         m = M // Nb
         KD = _symmetric_differentiation(D, S, Nb)
-        Y = Y[:m]
     else:
         m = M
         KD = sp.kron(sp.csr_matrix(D), sp.identity(n), format="csr")
     t_col = times[:m]                 # collocation times
+    Y = np.tile(model.initial_guess(), (m, 1)) if guess is None \
+        else np.array([guess.at(t) for t in t_col])
 
     def rates(Y):
         return (KD @ Y.ravel()).reshape(m, n)
