@@ -37,6 +37,7 @@ import scipy.sparse.linalg as spla
 from ..numerics.pencil import finite_modes, refine_eigenpairs
 from ..numerics.threads import thread_map
 from .floquet import FourierCoefficients, LinearPeriodicDAE, dominant_harmonic
+from .hill_reduced import CORRECTION_TRUST, ReductionFailed, reduced_converged_modes
 
 #: Largest eigenvalue count asked of ARPACK in one window before the window is halved.
 MAX_PER_WINDOW = 96
@@ -83,6 +84,9 @@ class HillModes:
     #: "converged" truncation: the largest relative exponent change from H - 1 to H (see
     #: _converged_modes), a bound on the exponents' truncation error (None for "tail")
     change: Optional[float] = None
+    #: how the band was searched: "whole pencil" (sparse shift-invert on Hill's pencils) or
+    #: "modal basis" (hill_reduced.py, weakly periodic systems)
+    method: str = "whole pencil"
 
     def periodic(self, i: int, times, rows=None) -> np.ndarray:
         """p_i(t) (len(times), rows) from the harmonics."""
@@ -103,6 +107,15 @@ def _complex_coefficients(fc: FourierCoefficients):
         out[int(j)] = ((aE - 1j * bE) / 2, (aA - 1j * bA) / 2)
         out[-int(j)] = ((aE + 1j * bE) / 2, (aA + 1j * bA) / 2)
     return out
+
+
+def coefficient_matrices(fc: FourierCoefficients) -> dict:
+    """{j: (E_j, A_j)} the complex harmonics j = -J..J of the coefficients as sparse
+    matrices."""
+    n = fc.dae.n
+    return {j: (sp.csc_matrix((Ed, (fc.pE.rows, fc.pE.cols)), shape=(n, n)),
+                sp.csc_matrix((Ad, (fc.pA.rows, fc.pA.cols)), shape=(n, n)))
+            for j, (Ed, Ad) in _complex_coefficients(fc).items()}
 
 
 def hill_pencil(fc: FourierCoefficients, H: int):
@@ -338,14 +351,20 @@ def hill_modes(dae: LinearPeriodicDAE, max_frequency: float, harmonics: Optional
             H = int(math.ceil(1.5 * H))
     stats: dict = {}
     if truncation == "converged" and len(H_list) > 1:
-        lam, V, tails, H, change = _converged_modes(fc, n, w, float(max_frequency), obs, wts,
-                                                    stats, converged_tol)
+        method = "whole pencil"
+        try:        # weakly periodic: the averaged system's modal basis (hill_reduced.py)
+            lam, V, tails, H, change = _reduced_modes(fc, n, w, float(max_frequency), obs,
+                                                      wts, stats, converged_tol)
+            method = "modal basis"
+        except (ReductionFailed, spla.ArpackError, np.linalg.LinAlgError):
+            lam, V, tails, H, change = _converged_modes(fc, n, w, float(max_frequency), obs,
+                                                        wts, stats, converged_tol)
         return HillModes(exponents=lam, vectors=V, tail=tails, harmonics=H, omega=w,
                          size=n * (2 * H + 1), coefficient_harmonics=J,
                          timings={"coefficients": t1 - t0,
                                   "eigen": time.perf_counter() - t1,
                                   "factorizations": stats.get("factorizations", 0)},
-                         solves=stats.get("solves", 0), change=change)
+                         solves=stats.get("solves", 0), change=change, method=method)
     change = None
     for attempt, H in enumerate(H_list):
         Ah, Eh = hill_pencil(fc, H)
@@ -467,6 +486,55 @@ def _converged_modes(fc, n: int, w: float, band: float, obs, wts, stats: dict, t
     change = max([a[4] for a in accepted if a[0].imag <= edge], default=0.0)
     order = np.lexsort((lam.real, lam.imag))
     return lam[order], V[:, :, order], tails[order], Hmax, change
+
+
+def _reduced_modes(fc, n: int, w: float, band: float, obs, wts, stats: dict, tol: float):
+    """The "converged" truncation on the averaged system's modal basis
+    (hill_reduced.reduced_converged_modes): (lam, V, tails, H, change).  Modes whose
+    estimated reduction error (CORRECTION_TRUST x their second-order corrections) exceeds
+    ``tol`` (a coupling too strong for the reduction) are refined one by one on the whole pencil (_refine) at H, H + 1, ... until they move by at
+    most ``tol``; ReductionFailed when more than max(TARGETED_MODES, a quarter) need it or a
+    refinement is ambiguous (the caller then searches the whole band)."""
+    lam, V, tails, H, change, corrections = reduced_converged_modes(
+        coefficient_matrices(fc), n, w, band, obs, wts, stats, tol, MAX_HARMONICS)
+    estimate = CORRECTION_TRUST * corrections
+    weak = np.flatnonzero(estimate > tol)
+    change = max([change, *estimate[estimate <= tol]])
+    if not weak.size:
+        return lam, V, tails, H, change
+    if weak.size > max(TARGETED_MODES, lam.size // 4):
+        raise ReductionFailed(f"{weak.size} of {lam.size} modes are coupled too strongly for "
+                              "the modal basis")
+    pending = [(lam[i], None, None, H, math.inf) for i in weak]
+    results = {}
+    for Hr in range(H, MAX_HARMONICS + 1):
+        Ah, Eh = hill_pencil(fc, Hr)
+        found = _refine(Ah, Eh, pending, Hr, n, obs, wts, w, stats)
+        if found is None:
+            raise ReductionFailed("a refinement on the whole pencil is ambiguous")
+        still = []
+        for i, (eta, v, tail), p in zip(weak, found, pending):
+            move = abs(eta - p[0]) / max(abs(eta), w)
+            if Hr > H and move <= tol:
+                results[i] = (eta, v, tail, Hr, move)
+            else:
+                still.append((i, (eta, v, tail, Hr, move)))
+        if not still:
+            break
+        weak = np.array([i for i, _ in still], int)
+        pending = [p for _, p in still]
+    else:
+        raise ReductionFailed("a refined mode does not converge in the harmonics")
+    Hmax = max(H, *(r[3] for r in results.values()))
+    W = np.zeros((2 * Hmax + 1, n, lam.size), complex)
+    W[Hmax - H:Hmax + H + 1] = V
+    for i, (eta, v, tail, Hr, move) in results.items():
+        lam[i], tails[i] = eta, tail
+        W[:, :, i] = 0.0
+        W[Hmax - Hr:Hmax + Hr + 1, :, i] = v
+        change = max(change, move)
+    order = np.lexsort((lam.real, lam.imag))
+    return lam[order], W[:, :, order], tails[order], Hmax, change
 
 
 def _refine(Ah, Eh, pending, H, n, obs, wts, w, stats):

@@ -1,0 +1,337 @@
+"""Hill's method on the averaged system's modal basis, for weakly periodic systems: the
+multi-blade coordinates of an isotropic rotor, periodic only through gravity, tilt, shear and
+the tower (docs/floquet.md, "Hill's method on a modal basis").
+
+Such a system's exponents stay near those of its averaged pencil (A_0, E_0), and its periodic
+coupling is small.  The averaged pencil's right and left eigenvectors with |lambda| <=
+``BASIS_MARGIN`` times the band (one sparse LU, two ARPACK runs) make modal coordinates in
+which the Hill pencil of any truncation H is diagonal (lambda_j - i k w, mode j, harmonic k)
+plus the small coupling.  Each exponent of the band is then found on its own by Loewdin
+partitioning: the modal coordinates within ``PARTITION_RADIUS`` w of it (near-resonances,
+where the periodic coupling mixes modes, cross-harmonic copies included) are kept exactly in
+a small dense eigenproblem; the others enter to second order through their diagonal; the
+exponent is iterated to a fixed point.  The coupling that leaves the basis (mostly into the
+algebraic constraints' subspace: NREL 5-MW at 8 m/s, up to 1.4e-5 of an exponent) enters to
+second order too: every harmonic block of the full Hill residual is solved on the
+complement of the basis by a short Neumann series of the averaged pencil's LU (exact on the
+nilpotent, index-3 part after three terms) and the exponent gets the two-sided Rayleigh
+correction.  H grows until every exponent moves by at most the tolerance from H - 1.
+
+Each exponent's two second-order corrections give its error estimate (CORRECTION_TRUST);
+hill.py refines the few modes whose estimate exceeds the tolerance on the whole pencil.
+
+Cost: a few sparse solves per mode instead of sparse LUs of the (2H + 1) n Hill pencils
+(NREL 5-MW at 8 m/s, 16 elements: 8.5 s -> 1.0 s).  ReductionFailed (and the whole-pencil
+search, hill.py) where the reduction does not apply: a defective averaged eigenvalue (a free
+yaw's double zero: no modal coordinates), a nearly degenerate cluster (ambiguous
+continuation), a strongly periodic system, two modes continuing into one exponent."""
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from .floquet import dominant_harmonic
+
+#: The modal basis holds the averaged pencil's eigenvectors with |lambda| <= BASIS_MARGIN x the
+#: band (1.5: NREL 5-MW, 68 modes for 25 in the band; 2.5 changes no exponent by > 2e-7).
+BASIS_MARGIN = 1.5
+#: Modal coordinates (j, k) with |lambda_j - i k w - eta| <= PARTITION_RADIUS w are kept
+#: exactly in an exponent's partition; farther ones to second order.
+PARTITION_RADIUS = 1.0
+#: The error left in an exponent after its second-order corrections, as a share of their
+#: size (measured against the whole pencil converged to 1e-7: at most 0.08 on the NREL
+#: 5-MW with 6 and 8 elements and the IEA 15-MW with 8; 0.23 with 4 NREL elements, where
+#: the corrections reach 7e-3).
+CORRECTION_TRUST = 0.25
+#: Strongly periodic: more than a quarter of the exponents move by more than this (relative
+#: to max(|eta|, w)) from the averaged system at H = 1; the reduction is given up at once
+#: (NREL 5-MW at 15 m/s with 4 elements: 13 of 32; at 8 m/s with 8 elements none, IEA
+#: 15-MW at 10 m/s with 8 elements 2 of 26).
+STRONG_FIRST_MOVE = 3e-3
+#: Largest modal Hill pencil (2H + 1) r formed (dense); beyond, ReductionFailed.
+MAX_REDUCED_SIZE = 3000
+#: Two modal coordinates whose averaged exponents (Hill copies included) are nearer than
+#: DEGENERATE w: the reduction is not used.
+DEGENERATE = 1e-3
+#: Terms of the Neumann series for the out-of-basis response: the index-3 nilpotent part is
+#: exact after three; the finite modes beyond the basis converge like (band / (1.5 band))^p.
+NEUMANN_TERMS = 5
+#: Largest |cos| of the angle between two eigenvectors of the averaged pencil accepted (a
+#: defective eigenvalue, split by round-off, has two nearly parallel ones: the modal basis
+#: does not exist).
+MAX_PARALLEL = 0.99
+#: ... and nearer than this (relative to max(|lambda|, w)): round-off splits a double
+#: eigenvalue by ~sqrt(eps) (the three-bladed rotor's free yaw: 3e-9 of w).
+DEFECTIVE_SPLIT = 1e-5
+
+
+class ReductionFailed(RuntimeError):
+    """The modal reduction does not apply (defective averaged pencil, ambiguous exponents)."""
+
+
+def _averaged_modes(A0, E0, radius: float, stats: dict):
+    """(lam, Xr, Yr, lu, sigma): real bases Xr, Yr (n, r) of the right and left eigenvectors
+    of the real pencil (A0, E0) with |lambda| <= radius (real and imaginary parts of each
+    complex pair), ARPACK shift-invert about a small negative shift with one sparse LU."""
+    n = A0.shape[0]
+    sigma = -1e-3 * radius
+    lu = spla.splu(sp.csc_matrix(A0 - sigma * E0))
+    stats["factorizations"] = stats.get("factorizations", 0) + 1
+    ET = sp.csc_matrix(E0.T)
+
+    def count(x):
+        stats["solves"] = stats.get("solves", 0) + 1
+        return x
+
+    right = spla.LinearOperator((n, n), dtype=float,
+                                matvec=lambda x: count(lu.solve(np.asarray(E0 @ x))))
+    left = spla.LinearOperator((n, n), dtype=float,
+                               matvec=lambda x: count(lu.solve(np.asarray(ET @ x), trans="T")))
+
+    def eigs(op):
+        k = min(60, n - 2)
+        while True:
+            mu, V = spla.eigs(op, k=k, which="LM", tol=1e-13, ncv=min(n - 1, 2 * k + 20))
+            lam = sigma + 1.0 / mu
+            if np.abs(lam - sigma).max() > 1.1 * radius + abs(sigma) or k >= n - 2:
+                return lam, V
+            k = min(2 * k, n - 2)
+
+    lam, X = eigs(right)
+    lamL, Y = eigs(left)
+    eps = 1e-9 * radius
+    keep = (np.abs(lam) <= radius) & (lam.imag >= -eps)
+    lam, X = lam[keep], X[:, keep]
+    # each right vector's left partner: the left eigenvalue nearest it or its conjugate (the
+    # real basis spans both members of a pair)
+    lamL = np.where(lamL.imag < -eps, lamL.conj(), lamL)
+    Y = Y[:, [int(np.argmin(np.abs(lamL - l))) for l in lam]]
+
+    def real_basis(V):
+        cols = []
+        for l, v in zip(lam, V.T):
+            if abs(l.imag) <= eps:                    # real eigenvalue: a real vector
+                k = int(np.argmax(np.abs(v)))
+                cols.append(np.real(v * np.conj(v[k]) / abs(v[k])))
+            else:
+                cols += [v.real, v.imag]
+        return np.linalg.qr(np.column_stack(cols))[0] if cols else np.zeros((n, 0))
+
+    return lam, real_basis(X), real_basis(Y), lu, sigma
+
+
+def _modal_coordinates(Xr, Yr, A0, E0, scale: float):
+    """(mu, Xm, Ym): the eigenpairs of the projected pencil (Yr^T A0 Xr, Yr^T E0 Xr), mapped
+    back: Ym^T E0 Xm = I, Ym^T A0 Xm = diag(mu) (``scale``: the base frequency w).  Raises ReductionFailed when a pair is
+    (nearly) parallel to another (a defective eigenvalue)."""
+    Ar, Er = Yr.T @ (A0 @ Xr), Yr.T @ (E0 @ Xr)
+    mu, VL, VR = sla.eig(Ar, Er, left=True, right=True)
+    VR = VR / np.linalg.norm(VR, axis=0)
+    VL = VL / np.linalg.norm(VL, axis=0)
+    Xm, Ym = Xr @ VR, Yr @ VL.conj()
+    # a defective eigenvalue (a free yaw's double zero) shows as two (nearly) equal
+    # eigenvalues with (nearly) parallel vectors (in Xr's orthonormal coordinates; a nearly
+    # real vector and its conjugate are nearly parallel too, but their eigenvalues differ)
+    parallel = np.abs(VR.conj().T @ VR) - np.eye(mu.size) > MAX_PARALLEL
+    close = np.abs(mu[:, None] - mu[None, :]) <= DEFECTIVE_SPLIT * np.maximum(
+        np.abs(mu)[:, None], scale)
+    if not np.all(np.isfinite(mu)) or np.any(parallel & close):
+        raise ReductionFailed("the averaged pencil has a defective (or infinite) eigenvalue "
+                              "among the basis's: no modal coordinates")
+    norm = np.einsum("ij,ij->j", Ym, np.asarray(E0 @ Xm))
+    return mu, Xm / norm, Ym
+
+
+class _ModalHill:
+    """The Hill pencil of truncation H in modal coordinates (index k * r + j for harmonic
+    k = -H..H, mode j): Ah, Eh dense, and the diagonal of Ah."""
+
+    def __init__(self, Ar: dict, Er: dict, mu: np.ndarray, H: int, w: float):
+        r = mu.size
+        ks = np.arange(-H, H + 1)
+        L = ks.size
+        self.H, self.r = H, r
+        self.Ah = np.zeros((L * r, L * r), complex)
+        self.Eh = np.zeros((L * r, L * r), complex)
+        for a, m in enumerate(ks):
+            for b, k in enumerate(ks):
+                j = int(m - k)
+                if j in Er:
+                    self.Eh[a * r:(a + 1) * r, b * r:(b + 1) * r] = Er[j]
+                    self.Ah[a * r:(a + 1) * r, b * r:(b + 1) * r] = Ar[j] - 1j * k * w * Er[j]
+        self.diag = np.concatenate([mu - 1j * k * w for k in ks])
+        self.w = w
+
+    def exponent(self, i: int, eta0: complex):
+        """(eta, c, d): the exponent continuing mode i (harmonic 0), its right and left
+        vectors (L r,) in modal coordinates; Loewdin partitioning iterated in eta."""
+        Ah, Eh, w = self.Ah, self.Eh, self.w
+        target = self.H * self.r + i
+        P = np.flatnonzero(np.abs(self.diag - eta0) <= PARTITION_RADIUS * w)
+        if target not in P:
+            P = np.union1d(P, [target])
+        Q = np.setdiff1d(np.arange(self.diag.size), P)
+        t = int(np.flatnonzero(P == target)[0])
+        near = np.abs(self.diag[P] - self.diag[target]) <= DEGENERATE * w
+        if near.sum() > 1:
+            # a (nearly) degenerate cluster (four blades on a rigid hub: the cyclic modes at
+            # +-1 per-rev from a blade mode are a base frequency apart): which exponent
+            # continues which mode is ambiguous
+            raise ReductionFailed("nearly degenerate averaged exponents (Hill copies "
+                                  "included): the continuation is ambiguous")
+        dA, dE = np.diagonal(Ah)[Q], np.diagonal(Eh)[Q]
+        APQ, EPQ = Ah[np.ix_(P, Q)], Eh[np.ix_(P, Q)]
+        AQP, EQP = Ah[np.ix_(Q, P)], Eh[np.ix_(Q, P)]
+        APP, EPP = Ah[np.ix_(P, P)], Eh[np.ix_(P, P)]
+        eta = eta0
+        for _ in range(50):
+            d = dA - eta * dE
+            lam, ZL, ZR = sla.eig(APP - (APQ - eta * EPQ) @ ((AQP - eta * EQP) / d[:, None]),
+                                  EPP, left=True, right=True)
+            share = np.abs(ZR[t]) / np.linalg.norm(ZR, axis=0)
+            best = int(np.argmax(share))
+            moved = abs(lam[best] - eta)
+            eta = lam[best]
+            if moved <= 1e-14 * max(abs(eta), w):
+                break
+        d = dA - eta * dE
+        c = np.zeros(self.diag.size, complex)
+        dl = np.zeros(self.diag.size, complex)
+        c[P] = ZR[:, best]
+        c[Q] = -((AQP - eta * EQP) @ ZR[:, best]) / d
+        yl = ZL[:, best].conj()                       # y^T (A - eta E) = 0
+        dl[P] = yl
+        dl[Q] = -(yl @ (APQ - eta * EPQ)) / d
+        return eta, c, dl
+
+
+def reduced_converged_modes(mats: dict, n: int, w: float, band: float, obs, wts, stats: dict,
+                            tol: float, max_harmonics: int):
+    """The exponents of the band 0 <= Im <= ``band``, |Re| <= w (Hill's "converged"
+    truncation, see hill._converged_modes) on the averaged system's modal basis: (lam, V
+    (2H+1, n, m), tails, H, change, corrections); ``corrections`` (m,): the size of each
+    exponent's second-order corrections (out of the basis, and among the partition's far
+    coordinates) relative to max(|eta|, w): where it exceeds the tolerance, the coupling is
+    too strong for the reduction to be trusted (hill.py refines those modes on the whole
+    pencil).  ``mats``: {j: (E_j, A_j)} the coefficients' complex
+    harmonics as sparse matrices (hill.coefficient_matrices).  Raises ReductionFailed when
+    the reduction does not apply."""
+    E0, A0 = (sp.csc_matrix(m.real) for m in mats[0])
+    _, Xr, Yr, lu, sigma = _averaged_modes(A0, E0, BASIS_MARGIN * band, stats)
+    if Xr.shape[1] != Yr.shape[1] or Xr.shape[1] == 0:
+        raise ReductionFailed(f"the right and left bases differ ({Xr.shape[1]} vs "
+                              f"{Yr.shape[1]} vectors)")
+    mu, Xm, Ym = _modal_coordinates(Xr, Yr, A0, E0, w)
+    Er = {j: Ym.T @ (E @ Xm) for j, (E, A) in mats.items()}
+    Ar = {j: Ym.T @ (A @ Xm) for j, (E, A) in mats.items()}
+    eps = 1e-9 * band
+    # candidates: the averaged exponents in the band (and half a base frequency beyond it,
+    # where the coupling may bring them in)
+    targets = np.flatnonzero((mu.imag >= -eps) & (mu.imag <= band + 0.5 * w)
+                             & (np.abs(mu.real) <= 1.5 * w))
+    eta = mu[targets].copy()
+    H_cap = min(max_harmonics, (MAX_REDUCED_SIZE // max(mu.size, 1) - 1) // 2)
+    for H in range(1, H_cap + 1):
+        hill = _ModalHill(Ar, Er, mu, H, w)
+        found = [hill.exponent(int(i), e) for i, e in zip(targets, eta)]
+        new = np.array([f[0] for f in found])
+        # a real system: a pair's member with Im >= 0 (two real exponents that merge into a
+        # complex pair may be followed to either member)
+        new = np.where(new.imag < -eps, new.conj(), new)
+        move = np.abs(new - eta) / np.maximum(np.abs(new), w)
+        if H == 1 and np.count_nonzero(move > STRONG_FIRST_MOVE) > move.size // 4:
+            raise ReductionFailed(f"{np.count_nonzero(move > STRONG_FIRST_MOVE)} of "
+                                  f"{move.size} exponents move by > {STRONG_FIRST_MOVE:.0e} "
+                                  "from the averaged system: strongly periodic")
+        eta = new
+        if not move.size or move.max() <= tol:
+            break
+    else:
+        raise ReductionFailed(f"the exponents still move by {move.max(initial=0):.1e} at "
+                              f"{H_cap} harmonics")
+    L = 2 * H + 1
+    kk = np.arange(-H, H + 1)
+    lam, vectors, tails, sizes = [], [], [], []
+    for (e, c, dl) in found:
+        p = (Xm @ c.reshape(L, -1).T).T                 # (L, n) harmonics of the vector
+        q = (Ym @ dl.reshape(L, -1).T).T
+        e, p, size = _out_of_basis(e, p, q, c, dl, hill, mats, lu, sigma, E0, Xm, Ym, w)
+        if e.imag < -eps:           # the conjugate solution: p_k -> conj(p_-k)
+            e, p = e.conjugate(), p[::-1].conj()
+        if any(abs(e - o) <= 1e-9 * w for o in lam) and abs(e.imag) > eps:
+            continue                # two real exponents merged into this pair: once
+        energy = np.einsum("r,kr->k", wts, np.abs(p[:, obs]) ** 2)
+        m = int(kk[dominant_harmonic(energy, kk, e.imag, w, tie=1e-12)])
+        if m:                       # the copy dominant in harmonic 0: eta + i m w
+            e = e + 1j * m * w
+            shifted = np.zeros_like(p)
+            if m > 0:
+                shifted[:L - m] = p[m:]
+            else:
+                shifted[-m:] = p[:L + m]
+            p = shifted
+            energy = np.einsum("r,kr->k", wts, np.abs(p[:, obs]) ** 2)
+        if not (-eps <= e.imag <= band and abs(e.real) <= w):
+            continue
+        if any(abs(e - o) <= 1e-9 * w for o in lam):
+            raise ReductionFailed("two averaged modes continue into copies of one exponent")
+        lam.append(e)
+        vectors.append(p)
+        tails.append((energy[0] + energy[-1]) / max(energy.sum(), 1e-300))
+        sizes.append(size)
+    lam = np.array(lam, complex)
+    V = np.array(vectors).transpose(1, 2, 0) if vectors else np.zeros((L, n, 0), complex)
+    tails, sizes = np.array(tails), np.array(sizes)
+    order = np.lexsort((lam.real, lam.imag))
+    change = float(move.max()) if move.size else 0.0
+    return lam[order], V[:, :, order], tails[order], H, change, sizes[order]
+
+
+def _out_of_basis(eta, p, q, c, dl, hill: _ModalHill, mats: dict, lu, sigma: float, E0, Xm,
+                  Ym, w: float):
+    """(eta, p, size) with the response outside the modal basis in every harmonic block:
+    the residual blocks r_m = sum_k (A_{m-k} - (eta + i k w) E_{m-k}) p_k projected off the
+    basis (Ym^T of it is zero), solved by the Neumann series of the averaged pencil's LU
+    about sigma, added to p; eta gets q^T T(eta) f / q^T E_h p (two-sided Rayleigh) and the
+    reduced pencil's own Rayleigh correction.  ``size``: the larger of the two corrections
+    relative to max(|eta|, w): both are second order in the coupling they stand for, so
+    the error left is far smaller while they are small."""
+    H = hill.H
+    L = 2 * H + 1
+    f = np.zeros_like(p)
+    for m in range(-H, H + 1):
+        r = np.zeros(p.shape[1], complex)
+        for k in range(-H, H + 1):
+            if m - k in mats:
+                E, A = mats[m - k]
+                r += A @ p[k + H] - (eta + 1j * k * w) * (E @ p[k + H])
+        b = -(r - E0 @ (Xm @ (Ym.T @ r)))
+        s = eta + 1j * m * w - sigma
+        term = _solve(lu, b)
+        total = term.copy()
+        for _ in range(NEUMANN_TERMS - 1):
+            term = s * _solve(lu, E0 @ term)
+            total += term
+        f[m + H] = total
+    num = 0.0
+    for a in range(L):                 # q^T T(eta) f over every block that f reaches
+        for m in range(-H, H + 1):
+            if (a - H) - m not in mats:
+                continue
+            E, A = mats[(a - H) - m]
+            num += q[a] @ (A @ f[m + H] - (eta + 1j * m * w) * (E @ f[m + H]))
+    Ec = hill.Eh @ c
+    den = dl @ Ec
+    # the reduced pencil's own two-sided Rayleigh correction (the coupling among the far
+    # modal coordinates that the partition neglected)
+    near = dl @ (hill.Ah @ c - eta * Ec) / den
+    scale = max(abs(eta), w)
+    return eta + num / den + near, p + f, max(abs(num / den), abs(near)) / scale
+
+
+def _solve(lu, b: np.ndarray) -> np.ndarray:
+    """lu^{-1} b for a complex b with a real LU."""
+    x = lu.solve(np.column_stack([b.real, b.imag]))
+    return x[:, 0] + 1j * x[:, 1]

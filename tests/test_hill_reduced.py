@@ -1,0 +1,178 @@
+"""Hill's method on the averaged system's modal basis (hawt_core/solvers/hill_reduced.py).
+
+Reference: the whole-pencil search of hill.py (sparse shift-invert on the full Hill pencils
+in frequency windows, then per-mode refinements, converged to a tighter tolerance) on the same
+multi-blade system: an independent algorithm on the same equations.  The reduction keeps the
+averaged pencil's modes within 1.5 bands, partitions each exponent's neighbourhood and adds
+second-order corrections; its documented error is at most CORRECTION_TRUST (0.25) of those
+corrections, below the truncation tolerance where it is used."""
+import dataclasses as dc
+import warnings
+
+import numpy as np
+import pytest
+
+import hawt_core.solvers.hill as hill
+import hawt_core.solvers.hill_reduced as hr
+from hawt_core.aero.wind import Wind
+from hawt_core.analyses.modal import _fourier_tol, periodic_dae
+from hawt_core.assembly import TurbineModel
+from hawt_core.io.catalog import load_any, shipped_controller
+from hawt_core.io.discon import discon_schedule
+from hawt_core.io.turbine_yaml import load_turbine
+from hawt_core.solvers.multiblade import MultiBladeTransform
+from hawt_core.solvers.periodic import periodic_steady_state
+
+
+def multiblade_system(turbine, elements, wind=None):
+    """(mbc DAE, Fourier coefficients, observed rows, weights, rotor speed [rad/s])."""
+    model = TurbineModel(turbine, elements=elements, wind=wind)
+    mbc = MultiBladeTransform(model).dae(periodic_dae(model, periodic_steady_state(model)))
+    rows, wts = model.display_rows()
+    return mbc, mbc.fourier(tol=_fourier_tol(model)), rows, wts ** 2, model.rotor_speed
+
+
+def modes(system, band_per_rev, tol=hill.CONVERGED_TOL, whole=False, monkeypatch=None):
+    mbc, fc, rows, wts, omega = system
+    if whole:
+        def refuse(*a, **k):
+            raise hr.ReductionFailed("the whole pencil asked for")
+        monkeypatch.setattr(hill, "reduced_converged_modes", refuse)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            return hill.hill_modes(mbc, band_per_rev * omega, observed=rows, weights=wts,
+                                   truncation="converged", coefficients=fc, converged_tol=tol)
+    finally:
+        if whole:
+            monkeypatch.undo()
+
+
+def agreement(got, ref, w):
+    """Largest relative distance (to max(|eta|, w)) of each exponent of ``got`` from the
+    nearest of ``ref``, and the smallest MAC of the matched harmonic-0 vectors."""
+    worst, mac = 0.0, 1.0
+    for i, eta in enumerate(got.exponents):
+        j = int(np.argmin(np.abs(ref.exponents - eta)))
+        worst = max(worst, abs(ref.exponents[j] - eta) / max(abs(eta), w))
+        a = got.vectors[got.harmonics, :, i]
+        b = ref.vectors[ref.harmonics, :, j]
+        mac = min(mac, abs(np.vdot(a, b)) ** 2 / (np.vdot(a, a).real * np.vdot(b, b).real))
+    return worst, mac
+
+
+@pytest.fixture(scope="module")
+def nrel_8ms():
+    t = load_any("nrel5mw")
+    from hawt_core.analyses.operating_points import at_operating_point
+    at, _ = at_operating_point(t, 8.0, discon_schedule(shipped_controller("nrel5mw")), None)
+    return multiblade_system(at, 8, Wind(8.0))
+
+
+def test_nrel5mw_in_wind_equals_the_whole_pencil(nrel_8ms, monkeypatch):
+    """NREL 5-MW at its 8 m/s operating point (tower, drivetrain, gravity, tilt, BEM), 8
+    elements, modes below 50 per-rev: the modal basis finds every exponent of the whole
+    pencil (converged to 1e-7) within 2e-6 relative (measured 3.5e-7; the truncation
+    tolerance is 5e-5), with the same vectors (MAC > 0.9999 in harmonic 0).  Without the
+    out-of-basis correction the exponents are off by > 1e-5 (the term is needed and the
+    test sees it)."""
+    mbc, fc, rows, wts, omega = nrel_8ms
+    w = mbc.omega
+    got = modes(nrel_8ms, 50.0)
+    ref = modes(nrel_8ms, 50.0, tol=1e-7, whole=True, monkeypatch=monkeypatch)
+    assert got.method == "modal basis" and ref.method == "whole pencil"
+    assert got.exponents.size == ref.exponents.size >= 25
+    worst, mac = agreement(got, ref, w)
+    assert worst <= 2e-6 and mac > 0.9999, (worst, mac)
+    assert got.change <= hill.CONVERGED_TOL
+
+    def no_correction(eta, p, *args):
+        return eta, p, 0.0
+    monkeypatch.setattr(hr, "_out_of_basis", no_correction)
+    crude = modes(nrel_8ms, 50.0)
+    assert agreement(crude, ref, w)[0] > 1e-5
+
+
+def test_five_blades_with_gravity_and_tilt_equal_the_whole_pencil(monkeypatch):
+    """Five NREL 5-MW blades on its hub, tower and drivetrain, in a vacuum with gravity and
+    the 5 deg tilt at 12.1 rpm, 6 elements, below 20 per-rev (multi-blade coordinates with
+    two cyclic pairs and the 5 per-rev periodicity): the modal basis against the whole
+    pencil (1e-7), 2e-6 relative."""
+    t = load_any("nrel5mw")
+    five = dc.replace(t, rotor=dc.replace(t.rotor, blades=5))
+    system = multiblade_system(five, 6)
+    got = modes(system, 20.0)
+    ref = modes(system, 20.0, tol=1e-7, whole=True, monkeypatch=monkeypatch)
+    assert got.method == "modal basis"
+    assert got.exponents.size == ref.exponents.size >= 12
+    worst, mac = agreement(got, ref, system[0].omega)
+    assert worst <= 2e-6 and mac > 0.9999, (worst, mac)
+
+
+def test_strongly_coupled_modes_are_refined_on_the_whole_pencil(nrel_8ms, monkeypatch):
+    """The modes whose estimated reduction error exceeds the tolerance are refined one by one
+    on the whole pencil (hill._reduced_modes).  The three lowest of the 8 m/s case (below
+    20 per-rev) marked as too coupled: each refined exponent equals the whole-band search
+    of the Hill pencil at the truncation its vector carries (1e-8 of max(|eta|, w): ARPACK
+    on these index-3 pencils, refine_eigenpairs in numerics/pencil.py), beyond
+    the reduction's; the other modes keep the reduction's exponents (1e-9: ARPACK's random
+    start moves the basis slightly from run to run) and vectors
+    (zero beyond its truncation)."""
+    mbc, fc, rows, wts, omega = nrel_8ms
+    w = mbc.omega
+    plain = modes(nrel_8ms, 20.0)
+    reduced = hill.reduced_converged_modes
+    marked = []
+
+    def too_coupled(*args, **kwargs):
+        lam, V, tails, H, change, corr = reduced(*args, **kwargs)
+        corr = corr.copy()
+        corr[:3] = 1.0                    # sorted by frequency: the three lowest
+        marked.extend([lam[:3].copy(), H])
+        return lam, V, tails, H, change, corr
+    monkeypatch.setattr(hill, "reduced_converged_modes", too_coupled)
+    got = modes(nrel_8ms, 20.0)
+    monkeypatch.undo()
+    first, H = marked
+    assert got.method == "modal basis" and got.harmonics > H
+    refined = [int(np.argmin(np.abs(got.exponents - e))) for e in first]
+    assert len(set(refined)) == 3
+    whole = {}
+    for i, eta in enumerate(got.exponents):
+        v = got.vectors[:, :, i]
+        inner = np.flatnonzero(np.abs(v).max(axis=1) > 0)
+        Hi = (inner.max() - inner.min()) // 2              # the harmonics the mode carries
+        if i in refined:
+            assert Hi > H
+            if Hi not in whole:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore", RuntimeWarning)
+                    whole[Hi] = hill.hill_modes(mbc, 20.0 * omega, harmonics=Hi,
+                                                observed=rows, weights=wts,
+                                                coefficients=fc).exponents
+            assert np.abs(whole[Hi] - eta).min() <= 1e-8 * max(abs(eta), w), (eta, Hi)
+        else:
+            assert Hi == H
+            assert np.abs(plain.exponents - eta).min() <= 1e-9 * max(abs(eta), w)
+
+
+def test_defective_and_degenerate_averaged_pencils_fall_back_to_the_whole_pencil():
+    """The reduction needs modal coordinates: a free yaw's double zero (the three-bladed
+    Table 1 rotor with gravity and tilt) has none, and four flat-plate blades on a rigid hub
+    in 7 m/s wind have cyclic modes exactly a base frequency apart (which exponent continues
+    which mode is ambiguous).  Both raise ReductionFailed with that reason, and hill_modes
+    answers with the whole pencil (whose results are checked against the monodromy in
+    test_hill.py and test_aeroelastic_modes.py)."""
+    from test_turbine_aero import teetering_rotor
+    P = load_turbine("hawt_core/data/three_blade_rotor.yaml")
+    free_yaw = dc.replace(P, gravity=dc.replace(P.gravity, enabled=True),
+                          nacelle=dc.replace(P.nacelle, shaft_tilt=0.1))
+    t = teetering_rotor(stiffness=1.0, gravity=True, tilt=0.1)
+    four = dc.replace(t, rotor=dc.replace(t.rotor, blades=4), hub=dc.replace(t.hub, teeter=False))
+    for system, band, reason in ((multiblade_system(free_yaw, 2), 8.0, "defective"),
+                                 (multiblade_system(four, 2, Wind(7.0)), 6.0, "degenerate")):
+        mbc, fc, rows, wts, omega = system
+        with pytest.raises(hr.ReductionFailed, match=reason):
+            hr.reduced_converged_modes(hill.coefficient_matrices(fc), mbc.n, mbc.omega,
+                                       band * omega, rows, wts, {}, 5e-5, hill.MAX_HARMONICS)
+        assert modes(system, band).method == "whole pencil"
