@@ -82,7 +82,8 @@ class HillModes:
     timings: dict = field(default_factory=dict)
     solves: int = 0
     #: "converged" truncation: the largest relative exponent change from H - 1 to H (see
-    #: _converged_modes), a bound on the exponents' truncation error (None for "tail")
+    #: _converged_modes), a bound on the exponents' truncation error (None for "tail"); on
+    #: the modal basis also the modes' estimated reduction errors (_reduced_modes)
     change: Optional[float] = None
     #: how the band was searched: "whole pencil" (sparse shift-invert on Hill's pencils) or
     #: "modal basis" (hill_reduced.py, weakly periodic systems)
@@ -492,9 +493,11 @@ def _reduced_modes(fc, n: int, w: float, band: float, obs, wts, stats: dict, tol
     """The "converged" truncation on the averaged system's modal basis
     (hill_reduced.reduced_converged_modes): (lam, V, tails, H, change).  Modes whose
     estimated reduction error (CORRECTION_TRUST x their second-order corrections) exceeds
-    ``tol`` (a coupling too strong for the reduction) are refined one by one on the whole pencil (_refine) at H, H + 1, ... until they move by at
-    most ``tol``; ReductionFailed when more than max(TARGETED_MODES, a quarter) need it or a
-    refinement is ambiguous (the caller then searches the whole band)."""
+    ``tol`` (a coupling too strong for the reduction) are refined one by one on the whole
+    pencil (_refine) at H, H + 1, ... until they move by at most ``tol``; ``change`` is the
+    largest of the truncation moves and the kept modes' error estimates.  ReductionFailed
+    when more than max(TARGETED_MODES, a quarter) need it or a refinement is ambiguous (the
+    caller then searches the whole band)."""
     lam, V, tails, H, change, corrections = reduced_converged_modes(
         coefficient_matrices(fc), n, w, band, obs, wts, stats, tol, MAX_HARMONICS)
     estimate = CORRECTION_TRUST * corrections

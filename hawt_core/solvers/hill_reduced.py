@@ -124,8 +124,9 @@ def _averaged_modes(A0, E0, radius: float, stats: dict):
 
 def _modal_coordinates(Xr, Yr, A0, E0, scale: float):
     """(mu, Xm, Ym): the eigenpairs of the projected pencil (Yr^T A0 Xr, Yr^T E0 Xr), mapped
-    back: Ym^T E0 Xm = I, Ym^T A0 Xm = diag(mu) (``scale``: the base frequency w).  Raises ReductionFailed when a pair is
-    (nearly) parallel to another (a defective eigenvalue)."""
+    back: Ym^T E0 Xm = I, Ym^T A0 Xm = diag(mu) (``scale``: the base frequency w).  Raises
+    ReductionFailed when two vectors are (nearly) parallel and their eigenvalues (nearly)
+    equal (a defective eigenvalue)."""
     Ar, Er = Yr.T @ (A0 @ Xr), Yr.T @ (E0 @ Xr)
     mu, VL, VR = sla.eig(Ar, Er, left=True, right=True)
     VR = VR / np.linalg.norm(VR, axis=0)
