@@ -142,3 +142,35 @@ def test_steady_state_with_the_reduction_meets_its_tolerance_over_the_whole_peri
     assert len(ps.times) % 3 == 0
     assert residual_at_every_sample(model, ps) < 1e-8
     assert ps.interpolation_error <= model.interpolation_tol
+
+
+def test_the_constant_attempt_is_skipped_only_where_no_constant_state_exists():
+    """periodic_steady_state skips the constant steady state where gravity turns in the
+    blades' frames (periodic._gravity_turns).  Reference: the constant solver itself
+    (Newton on the time-invariant equations, then its own check of R(0, y, t) = 0 over a
+    revolution at the solution, 1e-9): the Table 1 rotor without gravity has a constant
+    state, with gravity (and with a 0.1 rad tilt) none, and the NREL 5-MW deck (gravity on)
+    none; a one-bladed rotor 1 % off balance (no gravity) has none either but is not skipped
+    (its constant attempt fails as before)."""
+    from test_one_blade import one_blade
+
+    from hawt_core.numerics.newton import ConvergenceError
+    from hawt_core.solvers.steady import constant_steady_state
+    P = load_turbine("hawt_core/data/three_blade_rotor.yaml")
+    G = dc.replace(P, gravity=dc.replace(P.gravity, enabled=True))
+    models = [TurbineModel(P, elements=2), TurbineModel(G, elements=2),
+              TurbineModel(dc.replace(G, nacelle=dc.replace(G.nacelle, shaft_tilt=0.1)),
+                           elements=2),
+              nrel_in_sheared_yawed_wind(tower_shadow=False), TurbineModel(one_blade(0.99),
+                                                                          elements=3)]
+    skipped, constant = [], []
+    for model in models:
+        try:
+            constant_steady_state(model)
+            constant.append(True)
+        except (ValueError, ConvergenceError):
+            constant.append(False)
+        skipped.append(periodic._gravity_turns(model))
+    assert constant == [True, False, False, False, False]
+    assert skipped == [False, True, True, True, False]
+    assert not any(s and c for s, c in zip(skipped, constant))
