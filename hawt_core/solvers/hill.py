@@ -300,7 +300,7 @@ def hill_modes(dae: LinearPeriodicDAE, max_frequency: float, harmonics: Optional
                observed=None, weights=None, fourier_tol: float = 1e-10,
                coefficients: Optional[FourierCoefficients] = None,
                tail_tol: float = TAIL_TOL, truncation: str = "tail",
-               converged_tol: float = CONVERGED_TOL) -> HillModes:
+               converged_tol: float = CONVERGED_TOL, modal_basis: bool = True) -> HillModes:
     """Hill eigenpairs with the dominant-harmonic frequency in ``[0, max_frequency]`` [rad/s].
 
     Constant coefficients (H = 0): the eigenpairs of the real pencil (A_0, E_0) with
@@ -321,7 +321,9 @@ def hill_modes(dae: LinearPeriodicDAE, max_frequency: float, harmonics: Optional
     (on squared amplitudes)
     of the dominant-harmonic test (default: the differential rows, weight 1).  An exponent
     whose real part exceeds half the width of the window that finds it (at least w / 2^8) is
-    missed: heavily damped modes need their own search."""
+    missed: heavily damped modes need their own search.  ``modal_basis`` (truncation
+    "converged"): try the averaged system's modal basis first (hill_reduced.py; False: the
+    whole pencil at once, as a reference)."""
     t0 = time.perf_counter()
     fc = coefficients if coefficients is not None else dae.fourier(tol=fourier_tol)
     t1 = time.perf_counter()
@@ -352,14 +354,16 @@ def hill_modes(dae: LinearPeriodicDAE, max_frequency: float, harmonics: Optional
             H = int(math.ceil(1.5 * H))
     stats: dict = {}
     if truncation == "converged" and len(H_list) > 1:
-        method = "whole pencil"
-        try:        # weakly periodic: the averaged system's modal basis (hill_reduced.py)
-            lam, V, tails, H, change = _reduced_modes(fc, n, w, float(max_frequency), obs,
-                                                      wts, stats, converged_tol)
-            method = "modal basis"
-        except (ReductionFailed, spla.ArpackError, np.linalg.LinAlgError):
-            lam, V, tails, H, change = _converged_modes(fc, n, w, float(max_frequency), obs,
-                                                        wts, stats, converged_tol)
+        found = None
+        if modal_basis:     # weakly periodic: the averaged system's modal basis
+            try:
+                found = _reduced_modes(fc, n, w, float(max_frequency), obs, wts, stats,
+                                       converged_tol)
+            except (ReductionFailed, spla.ArpackError, np.linalg.LinAlgError):
+                pass        # it does not apply here: the whole pencil
+        method = "whole pencil" if found is None else "modal basis"
+        lam, V, tails, H, change = found if found is not None else _converged_modes(
+            fc, n, w, float(max_frequency), obs, wts, stats, converged_tol)
         return HillModes(exponents=lam, vectors=V, tail=tails, harmonics=H, omega=w,
                          size=n * (2 * H + 1), coefficient_harmonics=J,
                          timings={"coefficients": t1 - t0,
@@ -478,10 +482,7 @@ def _converged_modes(fc, n: int, w: float, band: float, obs, wts, stats: dict, t
                       f"at {H} harmonics (tolerance {tol:.0e})", RuntimeWarning, stacklevel=3)
         accepted += pending
     Hmax = max([a[3] for a in accepted], default=H)
-    L = 2 * Hmax + 1
-    V = np.zeros((L, n, len(accepted)), dtype=complex)
-    for i, (_, v, _, Hi, _) in enumerate(accepted):
-        V[Hmax - Hi:Hmax + Hi + 1, :, i] = v
+    V = _stack_harmonics([(v, Hi) for _, v, _, Hi, _ in accepted], n, Hmax)
     lam = np.array([a[0] for a in accepted], dtype=complex)
     tails = np.array([a[2] for a in accepted])
     change = max([a[4] for a in accepted if a[0].imag <= edge], default=0.0)
@@ -529,15 +530,22 @@ def _reduced_modes(fc, n: int, w: float, band: float, obs, wts, stats: dict, tol
     else:
         raise ReductionFailed("a refined mode does not converge in the harmonics")
     Hmax = max(H, *(r[3] for r in results.values()))
-    W = np.zeros((2 * Hmax + 1, n, lam.size), complex)
-    W[Hmax - H:Hmax + H + 1] = V
-    for i, (eta, v, tail, Hr, move) in results.items():
+    for i, (eta, _, tail, _, move) in results.items():
         lam[i], tails[i] = eta, tail
-        W[:, :, i] = 0.0
-        W[Hmax - Hr:Hmax + Hr + 1, :, i] = v
         change = max(change, move)
+    W = _stack_harmonics([(results[i][1], results[i][3]) if i in results else (V[:, :, i], H)
+                          for i in range(lam.size)], n, Hmax)
     order = np.lexsort((lam.real, lam.imag))
     return lam[order], W[:, :, order], tails[order], Hmax, change
+
+
+def _stack_harmonics(parts, n: int, H: int) -> np.ndarray:
+    """V (2H+1, n, m) from m vectors (v (2Hi+1, n), Hi) of truncations Hi <= H: each padded
+    with zero outer harmonics (exactly its truncated expansion)."""
+    V = np.zeros((2 * H + 1, n, len(parts)), dtype=complex)
+    for i, (v, Hi) in enumerate(parts):
+        V[H - Hi:H + Hi + 1, :, i] = v
+    return V
 
 
 def _refine(Ah, Eh, pending, H, n, obs, wts, w, stats):

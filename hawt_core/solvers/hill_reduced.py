@@ -72,7 +72,7 @@ class ReductionFailed(RuntimeError):
 
 
 def _averaged_modes(A0, E0, radius: float, stats: dict):
-    """(lam, Xr, Yr, lu, sigma): real bases Xr, Yr (n, r) of the right and left eigenvectors
+    """(Xr, Yr, lu, sigma): real bases Xr, Yr (n, r) of the right and left eigenvectors
     of the real pencil (A0, E0) with |lambda| <= radius (real and imaginary parts of each
     complex pair), ARPACK shift-invert about a small negative shift with one sparse LU."""
     n = A0.shape[0]
@@ -119,7 +119,7 @@ def _averaged_modes(A0, E0, radius: float, stats: dict):
                 cols += [v.real, v.imag]
         return np.linalg.qr(np.column_stack(cols))[0] if cols else np.zeros((n, 0))
 
-    return lam, real_basis(X), real_basis(Y), lu, sigma
+    return real_basis(X), real_basis(Y), lu, sigma
 
 
 def _modal_coordinates(Xr, Yr, A0, E0, scale: float):
@@ -220,7 +220,7 @@ def reduced_converged_modes(mats: dict, n: int, w: float, band: float, obs, wts,
     harmonics as sparse matrices (hill.coefficient_matrices).  Raises ReductionFailed when
     the reduction does not apply."""
     E0, A0 = (sp.csc_matrix(m.real) for m in mats[0])
-    _, Xr, Yr, lu, sigma = _averaged_modes(A0, E0, BASIS_MARGIN * band, stats)
+    Xr, Yr, lu, sigma = _averaged_modes(A0, E0, BASIS_MARGIN * band, stats)
     if Xr.shape[1] != Yr.shape[1] or Xr.shape[1] == 0:
         raise ReductionFailed(f"the right and left bases differ ({Xr.shape[1]} vs "
                               f"{Yr.shape[1]} vectors)")
