@@ -90,6 +90,7 @@ def main():
         # Hill's stage alone, same run: the modal basis (hill_reduced.py) against the
         # whole-pencil search it replaces (16 elements, 8 m/s)
         _hill_stage_ratio(turbine, ops[0])
+        _rate_jacobian_reuse(turbine, ops[0])
     if controller is not None:
         from hawt_core.assembly import TurbineModel
         from hawt_core.solvers.march import Simulator
@@ -128,6 +129,58 @@ def main():
     print(f"goland flutter sweep (19 speeds, {f.settings['elements']} elements): "
           f"{time.perf_counter() - t0:.1f} s; flutter {f.flutter_speed:.2f} m/s, "
           f"{f.flutter_frequency:.2f} rad/s")
+
+
+def _rate_jacobian_reuse(turbine, point, elements=32):
+    """Print, in one run, the structured Jacobian, the stages of the Floquet analysis that
+    linearize (periodic steady state; the multi-blade linearization's Fourier coefficients)
+    and the simulation's real-time factor (8 elements, frozen wake and Oye + Jones) with the
+    blocks' dR/dydot computed once per model (TurbineModel._block_jacobians) against stepped
+    at every call (the model's store emptied before each block)."""
+    from dataclasses import replace
+
+    from hawt_core.aero.wind import Wind
+    from hawt_core.analyses.modal import _fourier_tol, periodic_dae
+    from hawt_core.assembly import TurbineModel
+    from hawt_core.solvers.march import Simulator
+    from hawt_core.solvers.multiblade import MultiBladeTransform
+    from hawt_core.solvers.periodic import periodic_steady_state
+
+    class Stepped(TurbineModel):
+        def _block_jacobians(self, *args, **kw):
+            self._rate_jacobians.clear()
+            return super()._block_jacobians(*args, **kw)
+
+    t = replace(turbine, rotor=replace(turbine.rotor, speed=point["rotor_speed_rpm"] * np.pi / 30,
+                                       pitch=-np.radians(point["pitch_deg"])))
+    U = point["wind_speed"]
+    row = {}
+    for name, cls in (("reused", TurbineModel), ("stepped", Stepped)):
+        model = cls(t, elements=elements, wind=Wind(U))
+        y = model.initial_guess()
+        model.jacobians(0 * y, y, 0.0)
+        t0 = time.perf_counter()
+        for k in range(5):
+            model.jacobians(0 * y, y, 0.1 * k)
+        jac = (time.perf_counter() - t0) / 5
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            model = cls(t, elements=elements, wind=Wind(U))
+            t0 = time.perf_counter()
+            steady = periodic_steady_state(model)
+            MultiBladeTransform(model).dae(periodic_dae(model, steady)).fourier(
+                tol=_fourier_tol(model))
+            lin = time.perf_counter() - t0
+            rtf = [Simulator(cls(t, elements=8, wind=Wind(U), **aero), step_deg=1.0,
+                             record=False).run(5.0)["real_time_factor"]
+                   for aero in ({}, {"inflow": "oye", "airfoil": "jones"})]
+        row[name] = (jac, lin, *rtf)
+    (a, b) = row["reused"], row["stepped"]
+    print(f"nrel5mw dR/dydot reused vs stepped at {U:g} m/s: Jacobian ({elements} elements) "
+          f"{1e3 * a[0]:.0f} vs {1e3 * b[0]:.0f} ms ({b[0] / a[0]:.2f}x); steady state + "
+          f"Fourier coefficients ({elements} elements) {a[1]:.1f} vs {b[1]:.1f} s "
+          f"({b[1] / a[1]:.2f}x); simulation RTF (8 elements) frozen wake {a[2]:.2f} vs "
+          f"{b[2]:.2f}, Oye + Jones {a[3]:.2f} vs {b[3]:.2f}")
 
 
 def _hill_stage_ratio(turbine, point, elements=16):

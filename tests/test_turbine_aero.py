@@ -174,14 +174,16 @@ def test_structured_jacobians_in_wind_equal_complex_steps_on_the_whole_residual(
 def check_structured_jacobians(model, rng, columns=(), random_columns=6):
     """The structured Jacobians of ``model`` at a perturbed state and rates against plain
     complex steps on the whole residual (1e-9 of the largest entry) and central differences
-    (step 1e-6; 1e-5) on the rigid columns, ``columns`` and ``random_columns`` random ones."""
-    y = model.initial_guess() + 1e-3 * rng.standard_normal(model.n)
-    yd = 1e-3 * rng.standard_normal(model.n)
-    tt = 0.37
-    Jy, Jd = model.jacobians(yd, y, tt)
-    Ry, Rd = model.jacobians_reference(yd, y, tt)
-    for J, Jr in ((Jy, Ry), (Jd, Rd)):
-        assert abs(J - Jr).max() <= 1e-9 * abs(Jr).max()
+    (step 1e-6; 1e-5) on the rigid columns, ``columns`` and ``random_columns`` random ones.
+    A second state, rates and time check the blocks whose dR/dydot the model computes once
+    and reuses (TurbineModel._block_jacobians, constant_rates)."""
+    for tt, size in ((1.9, 3e-2), (0.37, 1e-3)):    # the second is the one checked below
+        y = model.initial_guess() + size * rng.standard_normal(model.n)
+        yd = size * rng.standard_normal(model.n)
+        Jy, Jd = model.jacobians(yd, y, tt)
+        Ry, Rd = model.jacobians_reference(yd, y, tt)
+        for J, Jr in ((Jy, Ry), (Jd, Rd)):
+            assert abs(J - Jr).max() <= 1e-9 * abs(Jr).max()
     cols = list(range(model.nq + model.nu)) + list(columns) + list(
         rng.choice(model.n, random_columns, replace=False))
     dense = Jy.toarray()

@@ -111,6 +111,12 @@ class RotorAerodynamics:
     its beam's), ``state_names`` per Gauss point, state-major (state j of Gauss point g of
     element e at ``(j N + e) G + g``)."""
 
+    #: the rows are affine in the rates with constant coefficients: the loads read no rate
+    #: (no added mass), Oye's rows weigh the rates by tau1, tau2 fixed at construction
+    #: (DBEMT_Mod = 1), Jones's by one (TurbineModel reuses dR/dydot; a model whose time
+    #: constants follow the state must say False)
+    constant_rate_coefficients = True
+
     def __init__(self, turbine: Turbine, wind: Wind, rotor_speed: float, beam,
                  rho: float = 1.225, inductions: Optional[tuple] = None,
                  inflow: str = "frozen", airfoil: str = "quasi-steady"):

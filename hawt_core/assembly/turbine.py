@@ -124,6 +124,9 @@ class TurbineModel:
         self._reference_jac = None  # built on first use by jacobians_reference (tests only)
         self._load_scale = None     # computed on first use by load_scale
         self._beam_jac = ColouredJacobian(self._blade_pattern())
+        #: dR/dydot values of the blocks whose rows are affine in the rates with constant
+        #: coefficients (_block_jacobians), computed on first use: key -> pattern values
+        self._rate_jacobians = {}
 
     def with_turbine(self, turbine: Turbine) -> "TurbineModel":
         """The model of ``turbine`` (the same mesh and rotor speed are the caller's to keep)
@@ -373,23 +376,38 @@ class TurbineModel:
         Jd = sp.csc_matrix((np.concatenate(vals_d), (np.concatenate(rows_d), np.concatenate(cols_d))), shape=shape)
         return Jy, Jd
 
-    @staticmethod
-    def _block_jacobians(jac, fun, yy, yyd, offsets, Jy_parts, Jd_parts):
+    def _block_jacobians(self, jac, fun, yy, yyd, offsets, Jy_parts, Jd_parts,
+                         constant_rates=None):
         """Block-diagonal Jacobian entries of ``len(offsets)`` identical beams (the beam k's
         unknowns and rows start at ``offsets[k]``; ``yy``, ``yyd`` (nblk, n)) by coloured
         complex steps, all colours of all beams in one call of ``fun(Yd, Y, C) -> (C*nblk,
         n)``; appends (rows, cols, values) of dR/dy to ``Jy_parts``, of dR/dydot to
-        ``Jd_parts``."""
+        ``Jd_parts``.
+
+        ``constant_rates``: a key, for blocks whose rows are affine in the rates with
+        constant coefficients (a beam: the rates enter through the hat-weighted udot,
+        thetadot, the constant mass matrices' [Pdot, Hdot] and the tip body's; the section
+        loads read no rate; RotorAerodynamics.constant_rate_coefficients for the blades'
+        aerodynamic states): dR/dydot is then computed once per model, the same for every
+        beam (identical meshes), and only dR/dy is stepped: half the cost."""
         h = STEP
         nblk, n = yy.shape
         C = jac.n_colours
         seeds = np.repeat(jac.seeds, nblk, axis=0) * (1j * h)          # (C*nblk, n)
         Y, Yd = np.tile(yy, (C, 1)), np.tile(yyd, (C, 1))
-        for Yp, Ydp, (rr, cc, vv) in ((Y + seeds, Yd, Jy_parts), (Y, Yd + seeds, Jd_parts)):
-            comp = fun(Ydp, Yp, C).imag.reshape(C, nblk, n) / h
-            for k in range(nblk):
+        cached = self._rate_jacobians.get(constant_rates)
+        comp = fun(Yd, Y + seeds, C).imag.reshape(C, nblk, n) / h
+        if cached is None:
+            comp_d = fun(Yd + seeds, Y, C).imag.reshape(C, nblk, n) / h
+            if constant_rates is not None:
+                cached = self._rate_jacobians[constant_rates] = comp_d[jac._col_colour, 0,
+                                                                       jac._rows]
+        for k in range(nblk):
+            for rr, cc, vv in (Jy_parts, Jd_parts):
                 rr.append(jac._rows + offsets[k]), cc.append(jac._cols + offsets[k])
-                vv.append(comp[jac._col_colour, k, jac._rows])
+            Jy_parts[2].append(comp[jac._col_colour, k, jac._rows])
+            Jd_parts[2].append(cached if cached is not None
+                               else comp_d[jac._col_colour, k, jac._rows])
 
     def _blade_block_jacobians(self, v, w, g, air, yb, ydb, Jy_parts, Jd_parts):
         """Blade rows w.r.t. their own unknowns at the root motion (v, w), gravity g (Nb, 3)
@@ -400,7 +418,8 @@ class TurbineModel:
             self._beam_jac, lambda Yd, Y, C: self._blade_residual(
                 Yd, Y, rep(v, C), rep(w, C), rep(g, C), self._air_tile(air, C)),
             yb, ydb, [self.layout.blade_offset(k) for k in range(self.n_blades)],
-            Jy_parts, Jd_parts)
+            Jy_parts, Jd_parts, constant_rates="blade" if (
+                self.aero is None or self.aero.constant_rate_coefficients) else None)
 
     def _jacobians_tower(self, ydot, y, t):
         """Structured Jacobians with a flexible tower: blade rows w.r.t. blade unknowns (one
@@ -428,7 +447,8 @@ class TurbineModel:
         tip = gf[nu:]
         self._block_jacobians(self._tower_jac,
                               lambda Yd, Y, C: self._tower_residual(Yd, Y, tip, C, t),
-                              yt[None], ydt[None], [to], Jy_parts, Jd_parts)
+                              yt[None], ydt[None], [to], Jy_parts, Jd_parts,
+                              constant_rates="tower")
 
         # blade rows w.r.t. rigid q, u and the tower-top theta, V, Omega (root motion,
         # gravity), all perturbations in one batched call

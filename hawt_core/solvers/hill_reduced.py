@@ -301,28 +301,28 @@ def _out_of_basis(eta, p, q, c, dl, hill: _ModalHill, mats: dict, lu, sigma: flo
     the error left is far smaller while they are small."""
     H = hill.H
     L = 2 * H + 1
-    f = np.zeros_like(p)
-    for m in range(-H, H + 1):
-        r = np.zeros(p.shape[1], complex)
-        for k in range(-H, H + 1):
-            if m - k in mats:
-                E, A = mats[m - k]
-                r += A @ p[k + H] - (eta + 1j * k * w) * (E @ p[k + H])
-        b = -(r - E0 @ (Xm @ (Ym.T @ r)))
-        s = eta + 1j * m * w - sigma
-        term = _solve(lu, b)
-        total = term.copy()
-        for _ in range(NEUMANN_TERMS - 1):
-            term = s * _solve(lu, E0 @ term)
-            total += term
-        f[m + H] = total
+    kk = np.arange(-H, H + 1)
+    R = np.zeros((p.shape[1], L), complex)             # the residual blocks r_m, columns
+    for d, (E, A) in mats.items():                     # r_m += T_d(eta + i k w) p_k, k = m - d
+        k = kk[(kk + d >= -H) & (kk + d <= H)]
+        if k.size:
+            P = p[k + H].T
+            R[:, k + d + H] += A @ P - (E @ P) * (eta + 1j * k * w)
+    B = -(R - E0 @ (Xm @ (Ym.T @ R)))
+    s = eta + 1j * kk * w - sigma                        # (L,)
+    # the Neumann series of every block at once: one multi-column solve per term
+    term = _solve(lu, B)
+    total = term.copy()
+    for _ in range(NEUMANN_TERMS - 1):
+        term = s * _solve(lu, E0 @ term)
+        total += term
+    f = np.ascontiguousarray(total.T)                   # (L, n)
     num = 0.0
-    for a in range(L):                 # q^T T(eta) f over every block that f reaches
-        for m in range(-H, H + 1):
-            if (a - H) - m not in mats:
-                continue
-            E, A = mats[(a - H) - m]
-            num += q[a] @ (A @ f[m + H] - (eta + 1j * m * w) * (E @ f[m + H]))
+    for d, (E, A) in mats.items():     # q^T T(eta) f over every block that f reaches
+        m = kk[(kk + d >= -H) & (kk + d <= H)]
+        if m.size:
+            Fm = f[m + H].T
+            num += np.sum(q[m + d + H].T * (A @ Fm - (E @ Fm) * (eta + 1j * m * w)))
     Ec = hill.Eh @ c
     den = dl @ Ec
     # the reduced pencil's own two-sided Rayleigh correction (the coupling among the far
@@ -333,6 +333,8 @@ def _out_of_basis(eta, p, q, c, dl, hill: _ModalHill, mats: dict, lu, sigma: flo
 
 
 def _solve(lu, b: np.ndarray) -> np.ndarray:
-    """lu^{-1} b for a complex b with a real LU."""
+    """lu^{-1} b for a complex b (n,) or (n, k) with a real LU (one multi-column solve)."""
+    k = 1 if b.ndim == 1 else b.shape[1]
     x = lu.solve(np.column_stack([b.real, b.imag]))
-    return x[:, 0] + 1j * x[:, 1]
+    x = x[:, :k] + 1j * x[:, k:]
+    return x[:, 0] if b.ndim == 1 else x
