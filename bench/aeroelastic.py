@@ -12,6 +12,8 @@ tilt; frozen-wake BEM) at 8 and 18 m/s at its operating points, 16 elements, aga
 analysis in a vacuum in the same run, and at 8 m/s with 32 elements (first flap 0.31 % low;
 the issue's goal: < 5 s; not met; solver threads: all CPUs, HAWT_SOLVER_THREADS=1 for one);
 Hill's stage on the modal basis against the whole-pencil search (16 elements, 8 m/s, ratio),
+the Jacobian, the steady state + Fourier coefficients and the simulation with the beams'
+dR/dydot computed once per model against stepped at every call (same run, ratios),
 and the nonlinear
 simulation's real-time factor at 8 m/s against a vacuum, frozen wake and with Oye's inflow and
 Jones's lag (8 elements, 1 deg steps; goal >= 5; not met); the Floquet analysis with Oye's

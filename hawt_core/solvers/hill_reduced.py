@@ -90,17 +90,17 @@ def _averaged_modes(A0, E0, radius: float, stats: dict):
     left = spla.LinearOperator((n, n), dtype=float,
                                matvec=lambda x: count(lu.solve(np.asarray(ET @ x), trans="T")))
 
-    def eigs(op):
-        k = min(60, n - 2)
+    def eigs(op, k):
+        k = min(k, n - 2)
         while True:
             mu, V = spla.eigs(op, k=k, which="LM", tol=1e-13, ncv=min(n - 1, 2 * k + 20))
             lam = sigma + 1.0 / mu
             if np.abs(lam - sigma).max() > 1.1 * radius + abs(sigma) or k >= n - 2:
-                return lam, V
+                return lam, V, k
             k = min(2 * k, n - 2)
 
-    lam, X = eigs(right)
-    lamL, Y = eigs(left)
+    lam, X, k = eigs(right, 60)
+    lamL, Y, _ = eigs(left, k)          # the same spectrum: the count the right side needed
     eps = 1e-9 * radius
     keep = (np.abs(lam) <= radius) & (lam.imag >= -eps)
     lam, X = lam[keep], X[:, keep]
