@@ -302,12 +302,7 @@ def _out_of_basis(eta, p, q, c, dl, hill: _ModalHill, mats: dict, lu, sigma: flo
     H = hill.H
     L = 2 * H + 1
     kk = np.arange(-H, H + 1)
-    R = np.zeros((p.shape[1], L), complex)             # the residual blocks r_m, columns
-    for d, (E, A) in mats.items():                     # r_m += T_d(eta + i k w) p_k, k = m - d
-        k = kk[(kk + d >= -H) & (kk + d <= H)]
-        if k.size:
-            P = p[k + H].T
-            R[:, k + d + H] += A @ P - (E @ P) * (eta + 1j * k * w)
+    R = _hill_apply(mats, p, eta, w)                    # the residual blocks r_m, columns
     B = -(R - E0 @ (Xm @ (Ym.T @ R)))
     s = eta + 1j * kk * w - sigma                        # (L,)
     # the Neumann series of every block at once: one multi-column solve per term
@@ -317,12 +312,8 @@ def _out_of_basis(eta, p, q, c, dl, hill: _ModalHill, mats: dict, lu, sigma: flo
         term = s * _solve(lu, E0 @ term)
         total += term
     f = np.ascontiguousarray(total.T)                   # (L, n)
-    num = 0.0
-    for d, (E, A) in mats.items():     # q^T T(eta) f over every block that f reaches
-        m = kk[(kk + d >= -H) & (kk + d <= H)]
-        if m.size:
-            Fm = f[m + H].T
-            num += np.sum(q[m + d + H].T * (A @ Fm - (E @ Fm) * (eta + 1j * m * w)))
+    # q^T T(eta) f over every block that f reaches
+    num = np.sum(q.T * _hill_apply(mats, f, eta, w))
     Ec = hill.Eh @ c
     den = dl @ Ec
     # the reduced pencil's own two-sided Rayleigh correction (the coupling among the far
@@ -330,6 +321,22 @@ def _out_of_basis(eta, p, q, c, dl, hill: _ModalHill, mats: dict, lu, sigma: flo
     near = dl @ (hill.Ah @ c - eta * Ec) / den
     scale = max(abs(eta), w)
     return eta + num / den + near, p + f, max(abs(num / den), abs(near)) / scale
+
+
+def _hill_apply(mats: dict, v: np.ndarray, eta, w: float) -> np.ndarray:
+    """Hill's pencil T(eta) applied to the harmonic blocks ``v`` (L, n), as columns (n, L):
+    column m (of -H..H) is sum_k (A_{m-k} - (eta + i k w) E_{m-k}) v_k, ``mats`` {d: (E_d,
+    A_d)}; one sparse product per coefficient harmonic d."""
+    L = v.shape[0]
+    H = (L - 1) // 2
+    kk = np.arange(-H, H + 1)
+    out = np.zeros((v.shape[1], L), complex)
+    for d, (E, A) in mats.items():                      # k = m - d inside -H..H
+        k = kk[(kk + d >= -H) & (kk + d <= H)]
+        if k.size:
+            V = v[k + H].T
+            out[:, k + d + H] += A @ V - (E @ V) * (eta + 1j * k * w)
+    return out
 
 
 def _solve(lu, b: np.ndarray) -> np.ndarray:
