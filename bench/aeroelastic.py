@@ -13,7 +13,8 @@ analysis in a vacuum in the same run, and at 8 m/s with 32 elements (first flap 
 the issue's goal: < 5 s; not met; solver threads: all CPUs, HAWT_SOLVER_THREADS=1 for one);
 Hill's stage on the modal basis against the whole-pencil search (16 elements, 8 m/s, ratio),
 the Jacobian, the steady state + Fourier coefficients and the simulation with the beams'
-dR/dydot computed once per model against stepped at every call (same run, ratios),
+dR/dy from the Gauss-point integrands' steps and dR/dydot computed once per model, against
+dR/dy by the colours, and against both by the colours at every call (same run, ratios),
 and the nonlinear
 simulation's real-time factor at 8 m/s against a vacuum, frozen wake and with Oye's inflow and
 Jones's lag (8 elements, 1 deg steps; goal >= 5; not met); the Floquet analysis with Oye's
@@ -92,7 +93,7 @@ def main():
         # Hill's stage alone, same run: the modal basis (hill_reduced.py) against the
         # whole-pencil search it replaces (16 elements, 8 m/s)
         _hill_stage_ratio(turbine, ops[0])
-        _rate_jacobian_reuse(turbine, ops[0])
+        _jacobian_variants(turbine, ops[0])
     if controller is not None:
         from hawt_core.assembly import TurbineModel
         from hawt_core.solvers.march import Simulator
@@ -133,12 +134,14 @@ def main():
           f"{f.flutter_frequency:.2f} rad/s")
 
 
-def _rate_jacobian_reuse(turbine, point, elements=32):
+def _jacobian_variants(turbine, point, elements=32):
     """Print, in one run, the structured Jacobian, the stages of the Floquet analysis that
     linearize (periodic steady state; the multi-blade linearization's Fourier coefficients)
-    and the simulation's real-time factor (8 elements, frozen wake and Oye + Jones) with the
-    blocks' dR/dydot computed once per model (TurbineModel._block_jacobians) against stepped
-    at every call (the model's store emptied before each block)."""
+    and the simulation's real-time factor (8 elements, frozen wake and Oye + Jones) three
+    ways: dR/dy from the Gauss-point integrands' steps (fem/beam_jacobian.py) and dR/dydot
+    computed once per model (the default); dR/dy by the colours
+    (TurbineModel.pointwise_jacobians False); and by the colours with dR/dydot stepped at
+    every call too (the model's store emptied before each block)."""
     from dataclasses import replace
 
     from hawt_core.aero.wind import Wind
@@ -148,7 +151,12 @@ def _rate_jacobian_reuse(turbine, point, elements=32):
     from hawt_core.solvers.multiblade import MultiBladeTransform
     from hawt_core.solvers.periodic import periodic_steady_state
 
-    class Stepped(TurbineModel):
+    class Colours(TurbineModel):
+        def __init__(self, *args, **kw):
+            super().__init__(*args, **kw)
+            self.pointwise_jacobians = False
+
+    class Stepped(Colours):
         def _block_jacobians(self, *args, **kw):
             self._rate_jacobians.clear()
             return super()._block_jacobians(*args, **kw)
@@ -157,7 +165,8 @@ def _rate_jacobian_reuse(turbine, point, elements=32):
                                        pitch=-np.radians(point["pitch_deg"])))
     U = point["wind_speed"]
     row = {}
-    for name, cls in (("reused", TurbineModel), ("stepped", Stepped)):
+    for name, cls in (("pointwise", TurbineModel), ("colours", Colours),
+                      ("stepped", Stepped)):
         model = cls(t, elements=elements, wind=Wind(U))
         y = model.initial_guess()
         model.jacobians(0 * y, y, 0.0)
@@ -177,12 +186,18 @@ def _rate_jacobian_reuse(turbine, point, elements=32):
                              record=False).run(5.0)["real_time_factor"]
                    for aero in ({}, {"inflow": "oye", "airfoil": "jones"})]
         row[name] = (jac, lin, *rtf)
-    (a, b) = row["reused"], row["stepped"]
-    print(f"nrel5mw dR/dydot reused vs stepped at {U:g} m/s: Jacobian ({elements} elements) "
-          f"{1e3 * a[0]:.0f} vs {1e3 * b[0]:.0f} ms ({b[0] / a[0]:.2f}x); steady state + "
-          f"Fourier coefficients ({elements} elements) {a[1]:.1f} vs {b[1]:.1f} s "
-          f"({b[1] / a[1]:.2f}x); simulation RTF (8 elements) frozen wake {a[2]:.2f} vs "
-          f"{b[2]:.2f}, Oye + Jones {a[3]:.2f} vs {b[3]:.2f}")
+    a = row["pointwise"]
+    print(f"nrel5mw Jacobians at {U:g} m/s, pointwise dR/dy + dR/dydot reused / colours + "
+          f"reused / colours + stepped:")
+    print(f"  Jacobian ({elements} elements) " + " / ".join(
+        f"{1e3 * r[0]:.0f}" for r in row.values()) + " ms (" + ", ".join(
+        f"{r[0] / a[0]:.2f}x" for r in list(row.values())[1:]) + ")")
+    print(f"  steady state + Fourier coefficients ({elements} elements) " + " / ".join(
+        f"{r[1]:.1f}" for r in row.values()) + " s (" + ", ".join(
+        f"{r[1] / a[1]:.2f}x" for r in list(row.values())[1:]) + ")")
+    print("  simulation RTF (8 elements) frozen wake " + " / ".join(
+        f"{r[2]:.2f}" for r in row.values()) + ", Oye + Jones " + " / ".join(
+        f"{r[3]:.2f}" for r in row.values()))
 
 
 def _hill_stage_ratio(turbine, point, elements=16):

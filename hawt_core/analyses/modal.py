@@ -129,12 +129,16 @@ def periodic_dae(model: TurbineModel, steady, check_symmetry: bool = True) -> Li
     blade relabelling S for Fast Floquet and multi-blade coordinates when the rotor has the
     symmetry (identical, equally spaced blades; a rigid hub or two blades on a teeter hinge).
     With ``check_symmetry`` the identity ``E(t + T/Nb) = S E(t) S^T`` (and A) is verified at
-    two times; if it does not hold to SYMMETRY_TOL, S is dropped with a RuntimeWarning and
-    the full period is used (a wrong symmetry would give wrong exponents)."""
+    t = T/5 (a generic azimuth on the Fourier sampler's first grid, so that its
+    linearization is reused and only E(t + T/Nb) is an extra one); if it does not hold
+    to SYMMETRY_TOL, S is dropped with a RuntimeWarning and the full period is used (a
+    wrong symmetry would give wrong exponents)."""
     cache = {}
 
     def jac(t):
         t = float(t)
+        # keyed by the exact time: a neighbour's linearization differs in round-off, and
+        # the Fourier sampler's error estimate (which picks its truncation) would see it
         if t not in cache:
             if len(cache) > 64:
                 cache.clear()
@@ -151,8 +155,8 @@ def periodic_dae(model: TurbineModel, steady, check_symmetry: bool = True) -> Li
     dae = LinearPeriodicDAE(lambda t: jac(t)[0], lambda t: jac(t)[1], model.period,
                             model.differential, S=S, blades=nb)
     if S is not None and check_symmetry:
-        # times on the Fourier sampler's first grid (their linearizations are reused)
-        err = dae.check_symmetry(model.period * np.array([0.0, 0.2]))
+        # a time on the Fourier sampler's first grid (its linearization is reused)
+        err = dae.check_symmetry(model.period * np.array([0.2]))
         dae.symmetry_error = err
         if not err <= SYMMETRY_TOL:
             warnings.warn(f"blade-relabelling symmetry: residual {err:.1e} > {SYMMETRY_TOL:.0e}"

@@ -28,6 +28,7 @@ aero/bem.py's BemRotor at the same stations.
 """
 from __future__ import annotations
 
+import functools
 from typing import Optional
 
 import numpy as np
@@ -35,6 +36,7 @@ import numpy as np
 from ..aero.bem import momentum_thrust, prandtl_loss, quasi_steady_inductions
 from ..aero.inflow import oye_residuals, oye_steady, oye_time_constants
 from ..aero.strip import BladeStrips, inflow_sine
+from ..fem.beam_jacobian import PointwiseBeamJacobian
 from ..model import Turbine
 from ..numerics.jacobian import ColouredJacobian, beam_station_pattern
 from ..numerics.newton import newton
@@ -113,7 +115,7 @@ class AeroelasticBlade:
                                             np.full(self.n_ind * N * G, inflow == "oye")])
         self.rotor_radius = float(e + L)
         self.set_inflow_time_constant(0.3)
-        self._jac = ColouredJacobian(self._pattern())
+        self._pointwise = PointwiseBeamJacobian(self.beam, self.n_ind)
 
     def _pattern(self):
         """Sparsity of dR/dy: the beam's blocks and the induction unknowns of each Gauss
@@ -135,9 +137,10 @@ class AeroelasticBlade:
         ind = y[:, self.n_beam:].reshape(B, self.n_ind, N, G).transpose(1, 2, 3, 0)
         return ind                                                   # (n_ind, N, G, B)
 
-    def residual(self, yd, y, t=0.0, details: Optional[dict] = None):
+    def residual(self, yd, y, t=0.0, details: Optional[dict] = None, capture=None):
         """R (B, n) or (n,); ``details``: filled with the Gauss-point arrays (N, G, B) of the
-        aerodynamics (alpha, phi, a, ap, loads) when given."""
+        aerodynamics (alpha, phi, a, ap, loads) when given; ``capture``: the beam's
+        (BeamElements.residual)."""
         one = np.ndim(y) == 1
         yd, y = np.atleast_2d(yd), np.atleast_2d(y)
         B = y.shape[0]
@@ -182,7 +185,7 @@ class AeroelasticBlade:
         wv = np.broadcast_to(self.blade.w, (B, 3))
         axes = np.broadcast_to(self.axes, (B, 2, 3))
         r_beam = self.beam.residual(yd[:, :self.n_beam], y[:, :self.n_beam], v, wv,
-                                    wind=axes, section_loads=loads)
+                                    wind=axes, section_loads=loads, capture=capture)
         flat = lambda x: x.transpose(2, 0, 1).reshape(B, -1)
         if self.inflow == "quasi-steady":
             extra = np.concatenate([flat(rows["a"]), flat(rows["ap"])], axis=1)
@@ -217,11 +220,17 @@ class AeroelasticBlade:
         u = y[self.n_beam - BLOCK_SIZE:self.n_beam][U_]          # the last node's u
         return float(u[2]), float(u[1])
 
+    @functools.cached_property
+    def _jac(self) -> ColouredJacobian:
+        """The colours of the pattern (the reference of the pointwise Jacobian)."""
+        return ColouredJacobian(self._pattern())
+
     def jacobian(self, y):
-        """dR/dy (n, n) at ydot = 0, sparse, exact by complex step (coloured columns, one
-        batched residual evaluation)."""
-        C = self._jac.n_colours
-        return self._jac.batched(lambda Y: self.residual(np.zeros((C, self.n)), Y), y)
+        """dR/dy (n, n) at ydot = 0, sparse, exact by complex step: one batched residual
+        evaluation of the Gauss-point integrands' steps (fem/beam_jacobian.py; the induction
+        rows are pointwise too)."""
+        return self._pointwise.matrix(lambda Yd, Y, cap: self.residual(Yd, Y, capture=cap),
+                                      np.zeros(self.n), y)
 
     def dense_jacobian(self, y):
         """dR/dy (n, n) dense by complex step, every column (the reference of the coloured

@@ -4,11 +4,13 @@ analysis (the symmetric modes of the paper's Table 2).
 
 from __future__ import annotations
 
+import functools
 from typing import Optional
 
 import numpy as np
 
 from ..fem.beam import BeamElements
+from ..fem.beam_jacobian import PointwiseBeamJacobian
 from ..fem.sections import mesh_beam
 from ..model import Turbine
 from ..numerics.checks import check_elements, check_rotor_speed
@@ -44,8 +46,13 @@ class SpinningBlade:
                           gravity=replace(turbine.gravity, enabled=False), drivetrain=None)
         v, w = RigidSystem(clamped).root_motion(np.zeros(0), np.zeros(0), 0.0)
         self.v, self.w = np.real(v[0]).astype(float), np.real(w[0]).astype(float)
-        self._jac = ColouredJacobian(block_tridiagonal_pattern(self.beam.pattern_blocks()))
+        self._pointwise = PointwiseBeamJacobian(self.beam)
         self.differential = self.beam.differential
+
+    @functools.cached_property
+    def _jac(self) -> ColouredJacobian:
+        """The colours of the beam's pattern (the reference of the pointwise Jacobians)."""
+        return ColouredJacobian(block_tridiagonal_pattern(self.beam.pattern_blocks()))
 
     def residual(self, ydot, y, t=0.0):
         """Beam residual (n,) of the blade whose root moves with the hub's steady motion
@@ -54,13 +61,13 @@ class SpinningBlade:
         return self.beam.residual(ydot[None], y[None], self.v[None], self.w[None])[0]
 
     def jacobians(self, ydot, y, t=0.0):
-        """Exact (complex-step, coloured) dR/dy and dR/dydot, sparse (n, n)."""
-        C = self._jac.n_colours
-        rep = lambda a: np.broadcast_to(a, (C,) + np.shape(a))
-        V, W = rep(self.v), rep(self.w)
-        Jy = self._jac.batched(lambda Y: self.beam.residual(rep(ydot), Y, V, W), y)
-        Jd = self._jac.batched(lambda Yd: self.beam.residual(Yd, rep(y), V, W), ydot)
-        return Jy, Jd
+        """Exact (complex-step) dR/dy and dR/dydot, sparse (n, n), from steps of the
+        Gauss-point integrands (fem/beam_jacobian.py)."""
+        D = self._pointwise.directions
+        V, W = np.broadcast_to(self.v, (D, 3)), np.broadcast_to(self.w, (D, 3))
+        fun = lambda Yd, Y, cap: self.beam.residual(Yd, Y, V, W, capture=cap)  # noqa: E731
+        return (self._pointwise.matrix(fun, ydot, y),
+                self._pointwise.matrix(fun, ydot, y, rates=True))
 
     def steady_state(self) -> np.ndarray:
         """Steady deflected state (n,) of the spinning blade (Newton from the rigid-body

@@ -18,6 +18,7 @@ loads it exerts on the tower top) are the tower's tip loads (docs/rigid-bodies.m
 """
 from __future__ import annotations
 
+import functools
 from typing import Optional
 
 import numpy as np
@@ -25,6 +26,7 @@ import scipy.sparse as sp
 
 from ..aero.wind import Wind
 from ..fem.beam import BeamElements
+from ..fem.beam_jacobian import PointwiseBeamJacobian
 from ..fem.sections import mesh_beam
 from ..model import Turbine
 from ..numerics.jacobian import (STEP, ColouredJacobian, beam_station_pattern,
@@ -119,14 +121,31 @@ class TurbineModel:
             self._tip_rows = np.concatenate([tl.u[-1], tl.theta[-1]])
             self._tower_g = np.array([[-float(turbine.gravity.g), 0.0, 0.0]]) \
                 if self.gravity else None
-            self._tower_jac = ColouredJacobian(
-                block_tridiagonal_pattern(self.tower.pattern_blocks()))
         self._reference_jac = None  # built on first use by jacobians_reference (tests only)
         self._load_scale = None     # computed on first use by load_scale
-        self._beam_jac = ColouredJacobian(self._blade_pattern())
-        #: dR/dydot values of the blocks whose rows are affine in the rates with constant
-        #: coefficients (_block_jacobians), computed on first use: key -> pattern values
+        #: the beam blocks' Jacobians from steps of the Gauss-point integrands
+        #: (fem/beam_jacobian.py); False: by the colours of their patterns (tests and bench
+        #: compare the two)
+        self.pointwise_jacobians = True
+        self._beam_pointwise = PointwiseBeamJacobian(
+            self.beam, len(self.aero.state_names) if self.n_aero else 0)
+        self._tower_pointwise = (PointwiseBeamJacobian(self.tower)
+                                 if self.tower is not None else None)
+        #: dR/dydot (rows, cols, values) of the blocks whose rows are affine in the rates
+        #: with constant coefficients (_block_jacobians), computed on first use:
+        #: (key, pointwise) -> entries
         self._rate_jacobians = {}
+
+    @functools.cached_property
+    def _beam_jac(self) -> ColouredJacobian:
+        """The colours of a blade block's pattern (built when first used: pointwise_jacobians
+        False)."""
+        return ColouredJacobian(self._blade_pattern())
+
+    @functools.cached_property
+    def _tower_jac(self) -> ColouredJacobian:
+        """The colours of the tower block's pattern (as _beam_jac)."""
+        return ColouredJacobian(block_tridiagonal_pattern(self.tower.pattern_blocks()))
 
     def with_turbine(self, turbine: Turbine) -> "TurbineModel":
         """The model of ``turbine`` (the same mesh and rotor speed are the caller's to keep)
@@ -216,21 +235,22 @@ class TurbineModel:
         k = len(self.aero.state_names) if self.n_aero else 0
         return beam_station_pattern(self.beam.pattern_blocks(), self.beam.xg.shape[1], k)
 
-    def _blade_residual(self, ydb, yb, v, w, g, air, out=None):
+    def _blade_residual(self, ydb, yb, v, w, g, air, out=None, capture=None):
         """Blade rows (K, blade_size) of K blades at root motions v, w (K, 3), gravity g
         (K, 3) or None and root data ``air`` (leading dimension K) or None (in a vacuum);
-        ``out``: a dict the aerodynamics fill (RotorAerodynamics.loads)."""
+        ``out``: a dict the aerodynamics fill (RotorAerodynamics.loads); ``capture``: the
+        beam's (BeamElements.residual)."""
         if air is None:
-            return self.beam.residual(ydb, yb, v, w, g)
+            return self.beam.residual(ydb, yb, v, w, g, capture=capture)
         nb = self.beam.n
         if out is None:
             out = self._capture if self._capture is not None else {}
         rb = self.beam.residual(ydb[:, :nb], yb[:, :nb], v, w, g, wind=air["vectors"],
                                 section_loads=self.aero.loads(air, yb[:, nb:], ydb[:, nb:],
-                                                              out))
+                                                              out), capture=capture)
         return np.concatenate([rb, out["rows"]], axis=1) if self.n_aero else rb
 
-    def _tower_residual(self, ydt, yt, tip_loads, batch=1, t=0.0):
+    def _tower_residual(self, ydt, yt, tip_loads, batch=1, t=0.0, capture=None):
         """Tower beam rows (batch, n_t) at times ``t`` (scalar or (batch,)): clamped at the
         ground (root frame inertial, at rest), gravity along -t1, tip loads = the rigid
         system's loads on the tower top, the tower's drag in wind (tower_aero.py)."""
@@ -241,7 +261,7 @@ class TurbineModel:
         drag = None if self.tower_drag is None else self.tower_drag.section_loads(
             np.broadcast_to(np.asarray(t, float), (batch,)))
         return self.tower.residual(ydt, yt, z, z, g, tl[:, :3], tl[:, 3:],
-                                   section_loads=drag)
+                                   section_loads=drag, capture=capture)
 
     def aero_loads(self, y, t):
         """Aerodynamic loads on each blade at the state ``y`` and time ``t`` [s], integrated
@@ -377,12 +397,17 @@ class TurbineModel:
         return Jy, Jd
 
     def _block_jacobians(self, jac, fun, yy, yyd, offsets, Jy_parts, Jd_parts,
-                         constant_rates=None):
+                         constant_rates=None, pointwise=None):
         """Block-diagonal Jacobian entries of ``len(offsets)`` identical beams (the beam k's
-        unknowns and rows start at ``offsets[k]``; ``yy``, ``yyd`` (nblk, n)) by coloured
-        complex steps, all colours of all beams in one call of ``fun(Yd, Y, C) -> (C*nblk,
+        unknowns and rows start at ``offsets[k]``; ``yy``, ``yyd`` (nblk, n)) by complex
+        steps, all steps of all beams in one call of ``fun(Yd, Y, C, capture) -> (C*nblk,
         n)``; appends (rows, cols, values) of dR/dy to ``Jy_parts``, of dR/dydot to
         ``Jd_parts``.
+
+        ``pointwise``: a PointwiseBeamJacobian of the block (fem/beam_jacobian.py): the
+        18 + k steps of the Gauss-point integrands (``capture``); None or
+        ``self.pointwise_jacobians`` False: the colours of ``jac()`` (a ColouredJacobian,
+        54 or more steps): the same values to round-off, two to three times the work.
 
         ``constant_rates``: a key, for blocks whose rows are affine in the rates with
         constant coefficients (a beam: the rates enter through the hat-weighted udot,
@@ -392,22 +417,35 @@ class TurbineModel:
         beam (identical meshes), and only dR/dy is stepped: half the cost."""
         h = STEP
         nblk, n = yy.shape
-        C = jac.n_colours
-        seeds = np.repeat(jac.seeds, nblk, axis=0) * (1j * h)          # (C*nblk, n)
-        Y, Yd = np.tile(yy, (C, 1)), np.tile(yyd, (C, 1))
-        cached = self._rate_jacobians.get(constant_rates)
-        comp = fun(Yd, Y + seeds, C).imag.reshape(C, nblk, n) / h
-        if cached is None:
-            comp_d = fun(Yd + seeds, Y, C).imag.reshape(C, nblk, n) / h
-            if constant_rates is not None:
-                cached = self._rate_jacobians[constant_rates] = comp_d[jac._col_colour, 0,
-                                                                       jac._rows]
-        for k in range(nblk):
-            for rr, cc, vv in (Jy_parts, Jd_parts):
-                rr.append(jac._rows + offsets[k]), cc.append(jac._cols + offsets[k])
-            Jy_parts[2].append(comp[jac._col_colour, k, jac._rows])
-            Jd_parts[2].append(cached if cached is not None
-                               else comp_d[jac._col_colour, k, jac._rows])
+        cached = self._rate_jacobians.get((constant_rates, self.pointwise_jacobians))
+        if pointwise is not None and self.pointwise_jacobians:
+            D = pointwise.directions
+            seeds = np.repeat(pointwise.seeds, nblk, axis=0) * (1j * h)   # (D*nblk, n)
+            Y, Yd = np.tile(yy, (D, 1)), np.tile(yyd, (D, 1))
+
+            def step(rates):
+                cap = {}
+                r = fun(Yd + seeds, Y, D, cap) if rates else fun(Yd, Y + seeds, D, cap)
+                return pointwise.values(cap, r[:, pointwise.n_beam:] if pointwise.k else None,
+                                        h, nblk, rates=rates)
+        else:
+            jac = jac()
+            C = jac.n_colours
+            seeds = np.repeat(jac.seeds, nblk, axis=0) * (1j * h)          # (C*nblk, n)
+            Y, Yd = np.tile(yy, (C, 1)), np.tile(yyd, (C, 1))
+
+            def step(rates):
+                r = fun(Yd + seeds, Y, C, None) if rates else fun(Yd, Y + seeds, C, None)
+                comp = r.imag.reshape(C, nblk, n) / h
+                return jac._rows, jac._cols, comp[jac._col_colour, :, jac._rows].T
+        for parts, (rows, cols, vals) in ((Jy_parts, step(False)),
+                                          (Jd_parts, cached or step(True))):
+            if parts is Jd_parts and cached is None and constant_rates is not None:
+                self._rate_jacobians[(constant_rates, self.pointwise_jacobians)] = \
+                    (rows, cols, vals[:1])
+            for k in range(nblk):
+                parts[0].append(rows + offsets[k]), parts[1].append(cols + offsets[k])
+                parts[2].append(vals[min(k, len(vals) - 1)])
 
     def _blade_block_jacobians(self, v, w, g, air, yb, ydb, Jy_parts, Jd_parts):
         """Blade rows w.r.t. their own unknowns at the root motion (v, w), gravity g (Nb, 3)
@@ -415,11 +453,12 @@ class TurbineModel:
         rep = lambda a, C: None if a is None else np.tile(a, (C, 1))    # (C*nb, 3)
         air = self._air_flat(air, self.n_blades)
         self._block_jacobians(
-            self._beam_jac, lambda Yd, Y, C: self._blade_residual(
-                Yd, Y, rep(v, C), rep(w, C), rep(g, C), self._air_tile(air, C)),
+            lambda: self._beam_jac, lambda Yd, Y, C, cap: self._blade_residual(
+                Yd, Y, rep(v, C), rep(w, C), rep(g, C), self._air_tile(air, C), capture=cap),
             yb, ydb, [self.layout.blade_offset(k) for k in range(self.n_blades)],
             Jy_parts, Jd_parts, constant_rates="blade" if (
-                self.aero is None or self.aero.constant_rate_coefficients) else None)
+                self.aero is None or self.aero.constant_rate_coefficients) else None,
+            pointwise=self._beam_pointwise)
 
     def _jacobians_tower(self, ydot, y, t):
         """Structured Jacobians with a flexible tower: blade rows w.r.t. blade unknowns (one
@@ -445,10 +484,11 @@ class TurbineModel:
                                     Jd_parts)
         gf = self.rigid.generalized_forces(q, u, ud, t, yb[:, 0:3], yb[:, 3:6], tw)
         tip = gf[nu:]
-        self._block_jacobians(self._tower_jac,
-                              lambda Yd, Y, C: self._tower_residual(Yd, Y, tip, C, t),
+        self._block_jacobians(lambda: self._tower_jac,
+                              lambda Yd, Y, C, cap: self._tower_residual(Yd, Y, tip, C, t,
+                                                                         capture=cap),
                               yt[None], ydt[None], [to], Jy_parts, Jd_parts,
-                              constant_rates="tower")
+                              constant_rates="tower", pointwise=self._tower_pointwise)
 
         # blade rows w.r.t. rigid q, u and the tower-top theta, V, Omega (root motion,
         # gravity), all perturbations in one batched call

@@ -352,11 +352,17 @@ def _harmonic_balance(model, harmonics, tol, max_iter, progress, guess,
         return r
 
     blocks = {}
+    # the first collocation time's linearization at the start: Newton's first Jacobian
+    # reuses it, and from a start at rest it also finds the ignorable coordinates below
+    start, Yd0 = Y.ravel().copy(), rates(Y)
+    first = model.jacobians(Yd0[0], Y[0], t_col[0])
 
     def jacobian(Yflat):
         Y = Yflat.reshape(m, n)
         Yd = rates(Y)
-        jy, jd = zip(*(model.jacobians(Yd[j], Y[j], t_col[j]) for j in range(m)))
+        reuse = np.array_equal(Yflat, start)
+        jy, jd = zip(*(first if reuse and j == 0 else model.jacobians(Yd[j], Y[j], t_col[j])
+                       for j in range(m)))
         blocks["jy"], blocks["jd"] = jy, jd
         return (sp.block_diag(jy, format="csr") + sp.block_diag(jd, format="csr") @ KD).tocsc()
 
@@ -378,7 +384,8 @@ def _harmonic_balance(model, harmonics, tol, max_iter, progress, guess,
 
     # ignorable coordinates (a free yaw angle) are defined up to a constant: hold them at
     # their value at t = 0 (bordered Newton steps, see blade_modes.newton)
-    ign = ignorable_columns(model.jacobians(np.zeros(n), Y[0], times[0])[0])
+    ign = ignorable_columns(first[0] if not np.any(Yd0[0])
+                            else model.jacobians(np.zeros(n), Y[0], times[0])[0])
     Yflat, it = newton(residual, jacobian, Y.ravel(), tol=tol, max_iter=max_iter,
                        what=f"periodic steady state (harmonic balance, {harmonics} harmonics)",
                        fixed=ign, linear_solve=krylov,
