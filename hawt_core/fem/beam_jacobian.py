@@ -70,7 +70,8 @@ class PointwiseBeamJacobian:
         self.local = L
         rows = np.empty((N, L), int)
         cols = np.empty((N, L), int)
-        node = lambda p: np.arange(12) if p == 0 else ROOT_SIZE + BLOCK_SIZE * (p - 1) + 6 + np.arange(12)
+        def node(p):    # node p: its rows [equilibrium, kinematics], unknowns [u, theta, V, Omega]
+            return np.arange(12) if p == 0 else ROOT_SIZE + BLOCK_SIZE * (p - 1) + 6 + np.arange(12)
         states_of = lambda e: (self.n_beam + (np.arange(self.k)[:, None] * N + e) * G
                                + np.arange(G)[None, :]).ravel()
         for e in range(N):
