@@ -114,6 +114,7 @@ class WindowSolver:
             raise ValueError("window solver: the rigid unknowns must be the first, "
                              "differential ones")
         self.h = None
+        self._lu = None                 # the base's dense LU, formed on first use (_lu0)
         self.base_age = 0
         self.pending_refresh = True
         #: window length (steps) for the next window: adapted between MIN_STEPS and
@@ -145,20 +146,19 @@ class WindowSolver:
         return A, B
 
     def refresh(self, x, yn, tm, h):
-        """New base: exact step matrices at the step unknowns x (midpoint time tm), scaled,
-        inverted (dense LU)."""
+        """New base: exact step matrices at the step unknowns x (midpoint time tm), scaled;
+        their dense inverse (windows of several steps) or LU (one step) formed when first
+        needed."""
         A, B = self._step_matrices(x, yn, tm, h)
         As = A * self.sc[None, :]
+        if not np.all(np.isfinite(As)):
+            raise WindowFailure("non-finite Newton matrix")
         rmax = np.abs(As).max(axis=1)
         rmax[rmax == 0] = 1.0
         self.row = 1.0 / rmax
         As *= self.row[:, None]
-        try:
-            lu = sla.lu_factor(As, check_finite=True)
-        except (ValueError, sla.LinAlgError) as exc:
-            raise WindowFailure(f"singular Newton matrix ({exc})") from exc
         Bs = B * (self.row[:, None] * self.sc[self.di][None, :])
-        self.A0s, self.Bs0, self._lu0 = As, Bs, lu
+        self.A0s, self.Bs0, self._lu = As, Bs, None
         self.Ainv0 = self.P0 = self.Ainv = self.P = None
         if self.azimuth_updates:        # the rigid-body updates need the inverse
             self._form_inverse()
@@ -212,10 +212,25 @@ class WindowSolver:
         self._set(Ainv, P)
         self.updates += 1
 
+    def _lu0(self):
+        """The base's dense LU (windows of one step: a controller step of the closed loop),
+        formed on first use."""
+        if self._lu is None:
+            try:
+                self._lu = sla.lu_factor(self.A0s, check_finite=False)
+            except (ValueError, sla.LinAlgError) as exc:
+                raise WindowFailure(f"singular Newton matrix ({exc})") from exc
+        return self._lu
+
     def _form_inverse(self):
         """The base's inverse and propagator P = -A^-1 B (dense), formed only when needed:
-        windows of one step (a controller step of the closed loop) use the LU alone."""
-        Ainv = sla.lu_solve(self._lu0, np.eye(self.n))
+        windows of one step use the LU alone.  LAPACK's getrf + getri (scipy.linalg.inv),
+        not the LU's solve against the identity: 1.6x faster (bench: 31 vs 50 ms at 650
+        unknowns, one thread)."""
+        try:
+            Ainv = sla.inv(self.A0s, check_finite=False)
+        except (ValueError, sla.LinAlgError) as exc:
+            raise WindowFailure(f"singular Newton matrix ({exc})") from exc
         if not np.all(np.isfinite(Ainv)):
             raise WindowFailure("singular Newton matrix")
         self.Ainv0, self.P0 = Ainv, -Ainv @ self.Bs0
@@ -247,7 +262,7 @@ class WindowSolver:
         The recurrence runs on the differential part only (P's rows there, contiguous);
         the other rows follow in one product."""
         if self.Ainv is None:           # one step, the base's LU (solve: window of K > 1)
-            return sla.lu_solve(self._lu0, (G * (-self.row)).T).T
+            return sla.lu_solve(self._lu0(), (G * (-self.row)).T).T
         D = (G * (-self.row)) @ self.Ainv.T
         Dd = D[:, self.di]
         Pd = self.Pd
