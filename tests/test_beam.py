@@ -14,11 +14,10 @@ import scipy.linalg as sl
 from scipy.optimize import brentq
 
 from hawt_core.analyses.blade_modes import blade_modes
-from hawt_core.fem.beam import BeamElements
-from hawt_core.fem.sections import mesh_beam
 from hawt_core.numerics.jacobian import (ColouredJacobian, block_tridiagonal_pattern,
                                 dense_complex_step)
 from hawt_core.model import Beam, Hub, Nacelle, Rotor, SectionTable, Turbine
+from beam_cases import every_term_beam
 from mesh_study import MESHES, by_family, mesh_study, richardson, solve
 
 BETA_L = np.array([1.87510407, 4.69409113, 7.85475744])   # clamped-free beam roots
@@ -45,17 +44,7 @@ def test_coloured_jacobian_equals_dense_complex_step_and_central_differences():
     Tolerances: coloured vs dense complex-step 1e-12 of the largest entry; vs central
     differences (relative step 1e-6) 1e-6 of the largest entry."""
     rng = np.random.default_rng(7)
-    st = np.array([0.0, 0.4, 1.0])
-    sec = SectionTable(stations=st, mass=[60.0, 50.0, 30.0], i1=[5.0, 4.0, 2.0],
-                       i2=[0.5, 0.4, 0.2], i3=[4.5, 3.6, 1.8], gj=[2e4, 1.5e4, 1e4],
-                       ei2=[4e6, 3e6, 1e6], ei3=[2e7, 1.5e7, 8e6], ea=[1e9, 8e8, 5e8],
-                       ga2=[3e8, 2e8, 1e8], ga3=[2e8, 1.5e8, 1e8], twist=[0.3, 0.1, -0.2],
-                       cg_offset=[[0.05, -0.02], [0.08, 0.01], [0.1, 0.03]],
-                       tension_offset=[[0.02, 0.01], [0.0, -0.01], [-0.03, 0.02]],
-                       prebend=[0.0, 0.1, 0.4], sweep=[0.0, -0.05, 0.1])
-    N = 3
-    beam = BeamElements(mesh_beam(Beam(8.0, sec, N, tip_mass=30.0,
-                                       tip_inertia=(1.0, 2.0, 3.0))))
+    beam = every_term_beam(3)
     y = rng.normal(size=beam.n) * 0.3
     yd = rng.normal(size=beam.n)
     v, w = rng.normal(size=3), rng.normal(size=3)
