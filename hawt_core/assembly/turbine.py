@@ -420,14 +420,10 @@ class TurbineModel:
         cached = self._rate_jacobians.get((constant_rates, self.pointwise_jacobians))
         if pointwise is not None and self.pointwise_jacobians:
             D = pointwise.directions
-            seeds = np.repeat(pointwise.seeds, nblk, axis=0) * (1j * h)   # (D*nblk, n)
-            Y, Yd = np.tile(yy, (D, 1)), np.tile(yyd, (D, 1))
 
             def step(rates):
-                cap = {}
-                r = fun(Yd + seeds, Y, D, cap) if rates else fun(Yd, Y + seeds, D, cap)
-                return pointwise.values(cap, r[:, pointwise.n_beam:] if pointwise.k else None,
-                                        h, nblk, rates=rates)
+                return pointwise.entries(lambda Yd, Y, cap: fun(Yd, Y, D, cap), yyd, yy,
+                                         rates)
         else:
             jac = jac()
             C = jac.n_colours

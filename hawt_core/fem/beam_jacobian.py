@@ -28,6 +28,9 @@ from .beam import BLOCK_SIZE, ROOT_SIZE, BeamElements
 
 #: nodal fields [u, theta, V, Omega] (12), then the element loads [F, M] (6)
 _FIELDS, _LOADS = 12, 6
+#: the element's row groups: (weight index in _wr, local rows, integrand components): left
+#: node and right node (equilibrium, kinematics), strain-displacement
+_ROW_GROUPS = ((0, (0, 12), (0, 12)), (1, (12, 24), (0, 12)), (2, (24, 30), (12, 18)))
 
 
 class PointwiseBeamJacobian:
@@ -115,8 +118,7 @@ class PointwiseBeamJacobian:
         V = np.zeros((N, nb, self.local, self.local))
         # structural rows w.r.t. nodal fields and element loads
         S4 = np.einsum("erg,gc,egbid->ebrcid", wr, phi, A[..., :_FIELDS + _LOADS])
-        for r, (r0, r1), (i0, i1) in ((0, (0, 12), (0, 12)), (1, (12, 24), (0, 12)),
-                                      (2, (24, 30), (12, 18))):
+        for r, (r0, r1), (i0, i1) in _ROW_GROUPS:
             V[:, :, r0:r1, 0:12] = S4[:, :, r, 0, i0:i1, :_FIELDS]
             V[:, :, r0:r1, 12:24] = S4[:, :, r, 1, i0:i1, :_FIELDS]
             V[:, :, r0:r1, 24:30] = S4[:, :, r, 2, i0:i1, _FIELDS:]
@@ -133,8 +135,7 @@ class PointwiseBeamJacobian:
         if k:
             # structural rows w.r.t. the states of each Gauss point (no sum over points)
             X = np.einsum("erg,egbid->ebrigd", wr, A[..., _FIELDS + _LOADS:])
-            for r, (r0, r1), (i0, i1) in ((0, (0, 12), (0, 12)), (1, (12, 24), (0, 12)),
-                                          (2, (24, 30), (12, 18))):
+            for r, (r0, r1), (i0, i1) in _ROW_GROUPS:
                 V[:, :, r0:r1, 30:] = X[:, :, r, i0:i1].transpose(0, 1, 2, 4, 3).reshape(
                     N, nb, i1 - i0, k * G)
             # the state rows (state-major (j, e, g)) at each Gauss point w.r.t. its inputs
@@ -158,15 +159,23 @@ class PointwiseBeamJacobian:
         return (np.concatenate([self._rows, r0]), np.concatenate([self._cols, c0]),
                 np.concatenate([vals, np.broadcast_to(v0, (nb, 6))], axis=1))
 
-    def matrix(self, fun, ydot, y, rates: bool = False) -> sp.csc_matrix:
-        """dR/dy (or with ``rates`` dR/dydot) (n, n) of ONE beam whose residual is
-        ``fun(Ydot, Y, capture) -> (D, n)`` (BeamElements.residual's capture passed on), at
-        ``ydot``, ``y`` (n,)."""
-        D = self.directions
-        Yd, Y = np.tile(np.asarray(ydot, float), (D, 1)), np.tile(np.asarray(y, float), (D, 1))
-        seeds = 1j * STEP * self.seeds
+    def entries(self, fun, ydot, y, rates: bool = False):
+        """(rows, cols, values (nblk, nnz)) of dR/dy (or with ``rates`` dR/dydot) of nblk
+        beams at ``ydot``, ``y`` (nblk, n), whose residual is ``fun(Ydot, Y, capture) ->
+        (D * nblk, n)`` (batch direction-major; BeamElements.residual's capture passed on):
+        all the steps of all beams in one call (see :meth:`values`)."""
+        ydot, y = np.atleast_2d(ydot), np.atleast_2d(y)
+        nblk, D = y.shape[0], self.directions
+        seeds = np.repeat(self.seeds, nblk, axis=0) * (1j * STEP)       # (D*nblk, n)
+        Yd, Y = np.tile(ydot, (D, 1)), np.tile(y, (D, 1))
         cap = {}
         r = fun(Yd + seeds, Y, cap) if rates else fun(Yd, Y + seeds, cap)
-        rows, cols, vals = self.values(cap, r[:, self.n_beam:] if self.k else None, STEP, 1,
-                                       rates=rates)
+        return self.values(cap, r[:, self.n_beam:] if self.k else None, STEP, nblk,
+                           rates=rates)
+
+    def matrix(self, fun, ydot, y, rates: bool = False) -> sp.csc_matrix:
+        """dR/dy (or with ``rates`` dR/dydot) (n, n) of ONE beam (:meth:`entries`) at
+        ``ydot``, ``y`` (n,)."""
+        rows, cols, vals = self.entries(fun, np.asarray(ydot, float), np.asarray(y, float),
+                                        rates)
         return sp.csc_matrix((vals[0], (rows, cols)), shape=(self.n, self.n))
