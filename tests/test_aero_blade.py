@@ -114,15 +114,15 @@ def test_shaft_power_equals_aerodynamic_power():
 
 
 def test_complex_step_jacobian_equals_central_differences():
-    """The coloured sparse Jacobian equals the dense complex-step one (1e-12: its pattern
-    misses no entry); 40 columns of it at the flexible blade's steady state: against central
+    """The sparse Jacobian (the Gauss-point integrands' steps, fem/beam_jacobian.py) equals
+    the dense complex-step one (1e-12: it misses no entry); 40 columns of it at the flexible blade's steady state: against central
     differences (step 1e-5 of the unknown's scale), 1e-5 of the column's largest entry plus
     the differences' own cancellation error (the residual's root rows are ~1e6 N)."""
     t = nrel5mw()
     m = AeroelasticBlade(t, U, elements=4)
     y = m.steady_state()
     J = m.jacobian(y).toarray()
-    dense = m.dense_jacobian(y)                               # the colouring loses nothing
+    dense = m.dense_jacobian(y)                               # the steps lose nothing
     assert np.allclose(J, dense, rtol=1e-12, atol=1e-12 * np.max(np.abs(dense)))
     scale = np.maximum(np.abs(y), 1.0)
     z = np.zeros(m.n)

@@ -28,7 +28,6 @@ aero/bem.py's BemRotor at the same stations.
 """
 from __future__ import annotations
 
-import functools
 from typing import Optional
 
 import numpy as np
@@ -38,7 +37,6 @@ from ..aero.inflow import oye_residuals, oye_steady, oye_time_constants
 from ..aero.strip import BladeStrips, inflow_sine
 from ..fem.beam_jacobian import PointwiseBeamJacobian
 from ..model import Turbine
-from ..numerics.jacobian import ColouredJacobian, beam_station_pattern
 from ..numerics.newton import newton
 from ..fem.beam import BLOCK_SIZE, ROOT_F, ROOT_M, U_
 from .spinning_blade import SpinningBlade
@@ -116,12 +114,6 @@ class AeroelasticBlade:
         self.rotor_radius = float(e + L)
         self.set_inflow_time_constant(0.3)
         self._pointwise = PointwiseBeamJacobian(self.beam, self.n_ind)
-
-    def _pattern(self):
-        """Sparsity of dR/dy: the beam's blocks and the induction unknowns of each Gauss
-        point (numerics.jacobian.beam_station_pattern)."""
-        return beam_station_pattern(self.beam.pattern_blocks(), self.beam.xg.shape[1],
-                                    self.n_ind).tocsc()
 
     # ------------------------------------------------------------------ residual
     def set_inflow_time_constant(self, mean_induction: float) -> None:
@@ -220,11 +212,6 @@ class AeroelasticBlade:
         u = y[self.n_beam - BLOCK_SIZE:self.n_beam][U_]          # the last node's u
         return float(u[2]), float(u[1])
 
-    @functools.cached_property
-    def _jac(self) -> ColouredJacobian:
-        """The colours of the pattern (the reference of the pointwise Jacobian)."""
-        return ColouredJacobian(self._pattern())
-
     def jacobian(self, y):
         """dR/dy (n, n) at ydot = 0, sparse, exact by complex step: one batched residual
         evaluation of the Gauss-point integrands' steps (fem/beam_jacobian.py; the induction
@@ -233,8 +220,8 @@ class AeroelasticBlade:
                                       np.zeros(self.n), y)
 
     def dense_jacobian(self, y):
-        """dR/dy (n, n) dense by complex step, every column (the reference of the coloured
-        one)."""
+        """dR/dy (n, n) dense by complex step, every column (the reference of
+        :meth:`jacobian`)."""
         n = self.n
         h = 1e-30
         Y = np.broadcast_to(y, (n, n)) + 1j * h * np.eye(n)

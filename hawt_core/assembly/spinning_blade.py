@@ -4,7 +4,6 @@ analysis (the symmetric modes of the paper's Table 2).
 
 from __future__ import annotations
 
-import functools
 from typing import Optional
 
 import numpy as np
@@ -14,7 +13,6 @@ from ..fem.beam_jacobian import PointwiseBeamJacobian
 from ..fem.sections import mesh_beam
 from ..model import Turbine
 from ..numerics.checks import check_elements, check_rotor_speed
-from ..numerics.jacobian import ColouredJacobian, block_tridiagonal_pattern
 from ..numerics.newton import newton
 from ..rigid import RigidSystem
 
@@ -48,11 +46,6 @@ class SpinningBlade:
         self.v, self.w = np.real(v[0]).astype(float), np.real(w[0]).astype(float)
         self._pointwise = PointwiseBeamJacobian(self.beam)
         self.differential = self.beam.differential
-
-    @functools.cached_property
-    def _jac(self) -> ColouredJacobian:
-        """The colours of the beam's pattern (the reference of the pointwise Jacobians)."""
-        return ColouredJacobian(block_tridiagonal_pattern(self.beam.pattern_blocks()))
 
     def residual(self, ydot, y, t=0.0):
         """Beam residual (n,) of the blade whose root moves with the hub's steady motion
