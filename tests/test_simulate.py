@@ -18,6 +18,8 @@ from hawt_core.analyses.blade_modes import blade_modes
 from hawt_core.numerics.rotations import q_apply
 from hawt_core.model import Beam, Gravity, Hub, Nacelle, Rotor, SectionTable, Turbine
 from hawt_core.solvers.march import SimulationError, Simulator, parse_perturb
+from hawt_core.solvers.march.window import WindowSolver
+from tower_turbines import soft_tower_turbine
 
 SEC = dict(mass=67.5772, i1=5, i2=1e-4, i3=4.9999, gj=21.8e3, ei2=4.36e6, ei3=21.8e6)
 
@@ -510,17 +512,20 @@ def test_window_steps_meet_the_newton_tolerance():
     assert worst < 10 * tol
 
 
-@pytest.mark.parametrize("yaw_free", [False, True], ids=["yaw-locked", "yaw-free"])
-def test_window_solver_equals_step_by_step_newton(yaw_free):
+@pytest.mark.parametrize("yaw_free,tower", [(False, False), (True, False), (True, True)],
+                         ids=["yaw-locked", "yaw-free", "yaw-free-flexible-tower"])
+def test_window_solver_equals_step_by_step_newton(yaw_free, tower):
     """Reference: the step-by-step Newton solver (sparse LU, its own predictor and stopping
     test) on the same implicit-midpoint equations. The time-parallel window solver
-    (24 steps per window, dense frozen matrices, rigid rows and columns updated per window
-    when the yaw is free) reaches the same trajectory: every recorded output agrees to 1e-6 of
-    the variable scales over one revolution at newton_tol = 1e-10 (each method leaves errors
-    of about the tolerance per step, which the undamped modes accumulate), and it needs fewer
-    Jacobians (the base is reused; the rigid rows and columns are updated by Woodbury's
-    formula)."""
-    model = TurbineModel(paper(N=4, yaw_free=yaw_free))
+    (24 steps per window, dense frozen matrices, the coupling rows and columns updated per
+    window when the yaw is free or the tower flexible: the tower top sees the turning root
+    loads and moves the turning roots) reaches the same trajectory: every recorded output
+    agrees to 1e-6 of the variable scales over one revolution at newton_tol = 1e-10 (each
+    method leaves errors of about the tolerance per step, which the undamped modes
+    accumulate), and it needs fewer Jacobians (the base is reused; the coupling rows and
+    columns are updated by Woodbury's formula)."""
+    turbine = paper(N=4, yaw_free=yaw_free)
+    model = TurbineModel(_on_soft_tower(turbine) if tower else turbine)
     kw = dict(step_deg=1.0, perturb={"teeter": 0.02, **({"yaw_rate": 0.02} if yaw_free else {})},
               newton_tol=1e-10)
     a = Simulator(model, method="window", **kw)
@@ -539,7 +544,58 @@ def test_window_solver_equals_step_by_step_newton(yaw_free):
     s = a.summary()
     assert s["window_failures"] == 0
     assert s["jacobian_evaluations"] < b.summary()["jacobian_evaluations"]
-    assert (s["window_rigid_updates"] > 0) == yaw_free
+    assert (s["window_rigid_updates"] > 0) == (yaw_free or tower)
+
+
+def _on_soft_tower(turbine):
+    """The turbine's rotor on the soft tower of tests/tower_turbines.py (its hub and
+    nacelle, the turbine's yaw setting)."""
+    soft = soft_tower_turbine()
+    return replace(turbine, tower=soft.tower, hub=soft.hub,
+                   nacelle=replace(soft.nacelle, yaw_free=turbine.nacelle.yaw_free))
+
+
+@pytest.mark.parametrize("tower", [False, True], ids=["rigid-tower", "flexible-tower"])
+def test_window_coupling_update_equals_the_exact_matrix(tower):
+    """Reference: the exact scaled step matrices A = dG_k/dx_k, B = dG_k/dx_{k-1}
+    (TurbineModel.jacobians at the same state, a later time: the blades turned by 0.3
+    revolution; free yaw, gravity). After the window solver's Woodbury update
+    (WindowSolver.update_rigid) of a base formed at the first time, inv(A^-1) equals the
+    exact A in the coupling columns (rigid unknowns, tower top's theta, V, Omega) and the
+    coupling rows at the root loads, and the base everywhere else (1e-9 of the largest
+    entry); P = -A^-1 B with B's coupling columns exact and the others the base's (1e-9).
+    With a flexible tower the coupling's part of the tower's tip rows is added to the
+    tower's own beam terms, which the update must keep."""
+    turbine = paper(N=3, yaw_free=True, gravity=True)
+    model = TurbineModel(_on_soft_tower(turbine) if tower else turbine)
+    sim = Simulator(model, step_deg=2.0, record=False, method="window")
+    rng = np.random.default_rng(7)
+    x = model.initial_guess() + 1e-2 * sim._scale * rng.standard_normal(model.n)
+    di = sim._di
+    yn = x[di] + 1e-3 * sim._scale[di] * rng.standard_normal(len(di))
+    h, t0, t1 = sim.h, 0.1, 0.1 + 0.3 * model.period
+    win = WindowSolver(model, sim._scale, sim.diff, 1e-8, azimuth_updates=True)
+    win.refresh(x, yn, t0, h)
+    A0, B0 = win.A0s.copy(), win.Bs0.copy()
+    win.update_rigid(x, yn, t1, h)
+    A1, B1 = win._step_matrices(x, yn, t1, h)
+    A1 = A1 * (win.row[:, None] * win.sc[None, :])
+    B1 = B1 * (win.row[:, None] * win.sc[di][None, :])
+    c = model.coupling_jacobians(np.zeros(model.n), x, t1)
+    cols, rows, kc = c["cols"], c["rows"], c["row_cols"]
+    changed = np.zeros(A0.shape, bool)
+    changed[:, cols] = True
+    changed[np.ix_(rows, kc)] = True
+    A = np.linalg.inv(win.inverse())
+    scale = np.abs(A1).max()
+    assert np.abs(A1[changed] - A0[changed]).max() > 1e-3 * scale     # something to update
+    assert np.abs(A[changed] - A1[changed]).max() <= 1e-9 * scale
+    assert np.abs(A[~changed] - A0[~changed]).max() <= 1e-9 * scale
+    pos = np.searchsorted(di, cols)
+    B = B0.copy()
+    B[:, pos] = B1[:, pos]
+    P = -win.inverse() @ B
+    assert np.abs(win.propagator() - P).max() <= 1e-9 * np.abs(P).max()
 
 
 def test_window_solver_falls_back_to_single_steps():

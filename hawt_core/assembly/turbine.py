@@ -363,38 +363,40 @@ class TurbineModel:
     def jacobians(self, ydot, y, t):
         """Exact (complex-step) sparse Jacobians (dR/dy, dR/dydot), csc.
 
-        Structured by subsystem so that the work is a handful of vectorized calls:
-        blade rows w.r.t. their own unknowns (all colours of all blades in ONE batched beam
-        call), blade rows w.r.t. the rigid unknowns (through the root motion, one batched call),
-        rigid rows w.r.t. rigid unknowns and root loads (a few small calls).
+        Structured by subsystem so that the work is a handful of vectorized calls: blade rows
+        w.r.t. their own unknowns (the Gauss-point steps of all blades in ONE batched beam
+        call), the flexible tower's rows w.r.t. its unknowns at fixed tip loads (one call),
+        and the rigid-body coupling (coupling_jacobians, two calls): every row w.r.t. the
+        rigid unknowns and the tower top's theta, V, Omega (through the root motion, gravity,
+        the air), the rigid rows and the tower-top loads (which enter the tower's tip rows
+        additively) w.r.t. those, the root loads and the rates.
         """
         y = np.asarray(y, float)
         ydot = np.asarray(ydot, float)
-        if self.tower is not None:
-            return self._jacobians_tower(ydot, y, t)
         nq, nu, nr, nb, nbl = self.nq, self.nu, self.nq + self.nu, self.n_blades, self.blade_size
-        q, u, qd, ud = y[:nq], y[nq:nr], ydot[:nq], ydot[nq:nr]
-        yb = y[nr:].reshape(nb, nbl)
-        ydb = ydot[nr:].reshape(nb, nbl)
-        v, w = self.rigid.root_motion(q, u, t)
-        g = self.rigid.gravity_in_root(q, t) if self.gravity else None
-        rows_y, cols_y, vals_y = [], [], []
-        rows_d, cols_d, vals_d = [], [], []
-        self._blade_block_jacobians(v, w, g, self._air(q, u, t), yb, ydb,
-                                    (rows_y, cols_y, vals_y), (rows_d, cols_d, vals_d))
-        if nr:          # the rigid columns and the rigid rows (they vary with the azimuth)
-            c = self.coupling_jacobians(ydot, y, t)
-            rc, kc = c["rigid"], c["root_loads"]
-            for J, rows, cols, vals in ((c["y_cols"], rows_y, cols_y, vals_y),
-                                        (c["ydot_cols"], rows_d, cols_d, vals_d)):
-                rr, cc = np.nonzero(J)
-                rows.append(rr), cols.append(rc[cc]), vals.append(J[rr, cc])
-            rr, cc = np.nonzero(c["y_rows"])
-            rows_y.append(rc[rr]), cols_y.append(kc[cc]), vals_y.append(c["y_rows"][rr, cc])
+        to = self.layout.tower_offset if self.tower is not None else self.n
+        q, u, ud = y[:nq], y[nq:nr], ydot[nq:nr]
+        yb = y[nr:to].reshape(nb, nbl)
+        ydb = ydot[nr:to].reshape(nb, nbl)
+        tw = self.tower_top(ydot, y)
+        v, w = self.rigid.root_motion(q, u, t, tw)
+        g = self.rigid.gravity_in_root(q, t, tw) if self.gravity else None
+        Jy_parts, Jd_parts = ([], [], []), ([], [], [])
+        self._blade_block_jacobians(v, w, g, self._air(q, u, t, tw), yb, ydb, Jy_parts,
+                                    Jd_parts)
+        if self.tower is not None:
+            tip = self.rigid.generalized_forces(q, u, ud, t, yb[:, 0:3], yb[:, 3:6], tw)[nu:]
+            self._block_jacobians(lambda: self._tower_jac,
+                                  lambda Yd, Y, C, cap: self._tower_residual(
+                                      Yd, Y, tip, C, t, capture=cap),
+                                  y[None, to:], ydot[None, to:], [to], Jy_parts, Jd_parts,
+                                  constant_rates="tower", pointwise=self._tower_pointwise)
+        if nr or self.tower is not None:
+            self._append_coupling(self.coupling_jacobians(ydot, y, t), Jy_parts, Jd_parts)
         shape = (self.n, self.n)
-        Jy = sp.csc_matrix((np.concatenate(vals_y), (np.concatenate(rows_y), np.concatenate(cols_y))), shape=shape)
-        Jd = sp.csc_matrix((np.concatenate(vals_d), (np.concatenate(rows_d), np.concatenate(cols_d))), shape=shape)
-        return Jy, Jd
+        return tuple(sp.csc_matrix((np.concatenate(vals), (np.concatenate(rows),
+                                                           np.concatenate(cols))), shape=shape)
+                     for rows, cols, vals in (Jy_parts, Jd_parts))
 
     def _block_jacobians(self, jac, fun, yy, yyd, offsets, Jy_parts, Jd_parts,
                          constant_rates=None, pointwise=None):
@@ -456,142 +458,104 @@ class TurbineModel:
                 self.aero is None or self.aero.constant_rate_coefficients) else None,
             pointwise=self._beam_pointwise)
 
-    def _jacobians_tower(self, ydot, y, t):
-        """Structured Jacobians with a flexible tower: blade rows w.r.t. blade unknowns (one
-        batched call), blade rows w.r.t. the rigid unknowns and the tower-top theta, V, Omega
-        (one batched call through the root motion and gravity), tower rows w.r.t. tower
-        unknowns at fixed tip loads (one batched call), and the rigid rows plus the tower-top
-        loads (which enter the tower's tip equilibrium rows additively) w.r.t. the rigid
-        unknowns and rates, the blade root loads and the tower-top state and rates."""
-        h = STEP
-        nq, nu, nr, nb, nbl = self.nq, self.nu, self.nq + self.nu, self.n_blades, self.blade_size
-        to = self.layout.tower_offset
-        q, u, ud = y[:nq], y[nq:nr], ydot[nq:nr]
-        yb = y[nr:to].reshape(nb, nbl)
-        ydb = ydot[nr:to].reshape(nb, nbl)
-        yt, ydt = y[to:], ydot[to:]
-        tw = self.tower_top(ydot, y)
-        v, w = self.rigid.root_motion(q, u, t, tw)
-        g = self.rigid.gravity_in_root(q, t, tw) if self.gravity else None
-        rows_y, cols_y, vals_y = [], [], []
-        rows_d, cols_d, vals_d = [], [], []
-        Jy_parts, Jd_parts = (rows_y, cols_y, vals_y), (rows_d, cols_d, vals_d)
-        self._blade_block_jacobians(v, w, g, self._air(q, u, t, tw), yb, ydb, Jy_parts,
-                                    Jd_parts)
-        gf = self.rigid.generalized_forces(q, u, ud, t, yb[:, 0:3], yb[:, 3:6], tw)
-        tip = gf[nu:]
-        self._block_jacobians(lambda: self._tower_jac,
-                              lambda Yd, Y, C, cap: self._tower_residual(Yd, Y, tip, C, t,
-                                                                         capture=cap),
-                              yt[None], ydt[None], [to], Jy_parts, Jd_parts,
-                              constant_rates="tower", pointwise=self._tower_pointwise)
-
-        # blade rows w.r.t. rigid q, u and the tower-top theta, V, Omega (root motion,
-        # gravity), all perturbations in one batched call
-        tip_cols = np.concatenate([self._tip_theta, self._tip_V, self._tip_Om])
-        xcols = np.concatenate([np.arange(nr), tip_cols])
-        nx = len(xcols)
-        x = np.concatenate([q, u, tw[0], tw[1], tw[2]]) + 1j * h * np.eye(nx)   # (nx, nx)
-        twx = np.concatenate([x[:, nr:].reshape(nx, 3, 3),
-                              np.broadcast_to(tw[3:], (nx, 2, 3))], axis=1)
-        tt = np.full(nx, float(t))
-        vx, wx = self.rigid.root_motion(x[:, :nq], x[:, nq:nr], tt, twx)   # (nx, nb, 3)
-        gx = self.rigid.gravity_in_root(x[:, :nq], tt, twx).reshape(nx * nb, 3) \
-            if self.gravity else None
-        r = self._blade_residual(np.tile(ydb, (nx, 1)), np.tile(yb, (nx, 1)).astype(complex),
-                                 vx.reshape(nx * nb, 3), wx.reshape(nx * nb, 3), gx,
-                                 self._air_flat(self._air(x[:, :nq], x[:, nq:nr], tt, twx),
-                                                nx * nb)).imag / h
-        r = r.reshape(nx, nb * nbl)
-        rr, cc = np.nonzero(r.T)
-        rows_y.append(nr + rr), cols_y.append(xcols[cc]), vals_y.append(r.T[rr, cc])
-
-        # rigid rows and tower-top loads w.r.t. rigid unknowns/rates, root loads, tower top:
-        # every perturbation of y, then of ydot, in one batched call
-        out_rows = np.concatenate([np.arange(nr), self._tip_rows])
-        cols_wrt_y = np.concatenate([np.arange(nr), self._root_cols, tip_cols])
-        cols_wrt_d = np.concatenate([np.arange(nr), self._tip_V, self._tip_Om])
-        ny, M = len(cols_wrt_y), len(cols_wrt_y) + len(cols_wrt_d)
-        yy = np.tile(y.astype(complex), (M, 1))
-        yyd = np.tile(ydot.astype(complex), (M, 1))
-        yy[np.arange(ny), cols_wrt_y] += 1j * h
-        yyd[ny + np.arange(M - ny), cols_wrt_d] += 1j * h
-        Fb = yy[:, nr:to].reshape(M, nb, nbl)
-        tm = np.full(M, float(t))
-        rk = self.rigid.kinematics(yy[:, :nq], yyd[:, :nq], yy[:, nq:nr], tm).reshape(M, nq)
-        d = np.concatenate([rk, self.rigid.generalized_forces(
-            yy[:, :nq], yy[:, nq:nr], yyd[:, nq:nr], tm, Fb[:, :, 0:3], Fb[:, :, 3:6],
-            self.tower_top(yyd, yy))], axis=1).imag / h                     # (M, nr + 6)
-        for part, cols, rr_, cc_, vv_ in ((d[:ny], cols_wrt_y, rows_y, cols_y, vals_y),
-                                          (d[ny:], cols_wrt_d, rows_d, cols_d, vals_d)):
-            pr, pc = np.nonzero(part)
-            rr_.append(out_rows[pc]), cc_.append(cols[pr]), vv_.append(part[pr, pc])
-        shape = (self.n, self.n)
-        Jy = sp.csc_matrix((np.concatenate(vals_y), (np.concatenate(rows_y),
-                                                     np.concatenate(cols_y))), shape=shape)
-        Jd = sp.csc_matrix((np.concatenate(vals_d), (np.concatenate(rows_d),
-                                                     np.concatenate(cols_d))), shape=shape)
-        return Jy, Jd
+    @staticmethod
+    def _append_coupling(c, Jy_parts, Jd_parts):
+        """Append the nonzero entries of coupling_jacobians' blocks ``c`` (one time) to the
+        (rows, cols, values) lists of dR/dy and dR/dydot."""
+        for J, rows, cols, (rr_, cc_, vv_) in (
+                (c["y_cols"], None, c["cols"], Jy_parts),
+                (c["ydot_cols"], None, c["cols"], Jd_parts),
+                (c["y_rows"], c["rows"], c["row_cols"], Jy_parts)):
+            r, k = np.nonzero(J)
+            rr_.append(r if rows is None else rows[r]), cc_.append(cols[k])
+            vv_.append(J[r, k])
 
     def coupling_jacobians(self, ydot, y, t):
-        """Exact (complex-step) partial derivatives of the rigid-body coupling, the entries of
-        dR/dy and dR/dydot that vary with the azimuth when the yaw is free (rigid tower):
+        """Exact (complex-step) partial derivatives of the rigid-body coupling: the entries of
+        dR/dy and dR/dydot that turn with the azimuth (the blades turn, the yaw axis and the
+        tower do not), which the window solver replaces every window (solvers/march/window.py):
 
-        * ``y_cols``, ``ydot_cols`` (n, nq + nu): every row w.r.t. the rigid unknowns
-          ``rigid`` (the rigid rows, and the blade rows through the root motion and gravity;
-          the blade rows do not depend on the rigid rates);
-        * ``y_rows`` (nq + nu, len(root_loads)): the rigid rows w.r.t. the blades' root
-          loads ``root_loads`` (the only other unknowns they depend on; no rate enters).
+        * ``cols``: the rigid unknowns, and with a flexible tower the tower top's theta, V,
+          Omega (the tip node's; they move the rigid system);
+        * ``y_cols``, ``ydot_cols`` (n, len(cols)): the coupling's part of those columns:
+          the blade rows (through the root motion, gravity and the air the blades see), the
+          rigid rows and, with a tower, the tower's tip equilibrium rows through the loads
+          the rigid system exerts on the tower top. The tower's own beam terms are NOT
+          included (they do not depend on the rigid system; the tip rows add the two), so
+          these are the whole columns only on a rigid tower. The blade rows read no rate of
+          these unknowns;
+        * ``rows``: the rigid rows (and the tower's tip rows); ``row_cols``: the blades' root
+          loads, the only other unknowns the coupling reads; ``y_rows`` (len(rows),
+          len(row_cols)): the coupling's part there (no rate enters).
 
         ``t`` may be an array of M times: the arrays then have a leading dimension M (same
-        state, several azimuths, in the same two batched calls: blade rows for all rigid
-        perturbations, rigid rows for all perturbations of y and ydot)."""
-        if self.tower is not None:
-            raise ValueError("coupling_jacobians: not available with a flexible tower")
+        state, several azimuths, in the same two batched calls: blade rows for all
+        perturbations of ``cols``, coupling rows for all perturbations of y and ydot)."""
         y = np.asarray(y, float)
         ydot = np.asarray(ydot, float)
         ts = np.atleast_1d(np.asarray(t, float))
         M = len(ts)
         h = STEP
         nq, nu, nr, nb, nbl = self.nq, self.nu, self.nq + self.nu, self.n_blades, self.blade_size
-        rc = np.arange(nr)
+        tower = self.tower is not None
+        to = self.layout.tower_offset if tower else self.n
+        yb, ydb = y[nr:to].reshape(nb, nbl), ydot[nr:to].reshape(nb, nbl)
+        tw = self.tower_top(ydot, y)
+        if tower:
+            tip_cols = np.concatenate([self._tip_theta, self._tip_V, self._tip_Om])
+            rate_cols = np.concatenate([np.arange(nr), self._tip_V, self._tip_Om])
+            out_rows = np.concatenate([np.arange(nr), self._tip_rows])
+            x0 = np.concatenate([y[:nr], tw[0], tw[1], tw[2]])
+        else:
+            tip_cols = np.zeros(0, int)
+            rate_cols = out_rows = np.arange(nr)
+            x0 = y[:nr]
+        xcols = np.concatenate([np.arange(nr), tip_cols])
         kc = self._root_cols
-        yb, ydb = y[nr:].reshape(nb, nbl), ydot[nr:].reshape(nb, nbl)
-        # blade rows: perturb the rigid unknowns through the root motion and gravity
-        x = np.tile(y[:nr].astype(complex), (M * nr, 1)) + 1j * h * np.tile(np.eye(nr), (M, 1))
-        tt = np.repeat(ts, nr)
-        v, w = self.rigid.root_motion(x[:, :nq], x[:, nq:], tt)
-        g = self.rigid.gravity_in_root(x[:, :nq], tt).reshape(M * nr * nb, 3) \
+        nx = len(xcols)
+        # blade rows: perturb the rigid unknowns (and the tower top) through the root motion,
+        # gravity and the air
+        x = np.tile(x0.astype(complex), (M * nx, 1)) + 1j * h * np.tile(np.eye(nx), (M, 1))
+        tt = np.repeat(ts, nx)
+        twx = (np.concatenate([x[:, nr:].reshape(M * nx, 3, 3),
+                               np.broadcast_to(tw[3:], (M * nx, 2, 3))], axis=1)
+               if tower else None)
+        q, u = x[:, :nq], x[:, nq:nr]
+        v, w = self.rigid.root_motion(q, u, tt, twx)
+        g = self.rigid.gravity_in_root(q, tt, twx).reshape(M * nx * nb, 3) \
             if self.gravity else None
-        air = self._air(x[:, :nq], x[:, nq:], tt)
-        rb = self._blade_residual(np.tile(ydb, (M * nr, 1)),
-                                  np.tile(yb, (M * nr, 1)).astype(complex),
-                                  v.reshape(M * nr * nb, 3), w.reshape(M * nr * nb, 3), g,
-                                  self._air_flat(air, M * nr * nb)).imag / h
-        y_cols = np.zeros((M, self.n, nr))
-        y_cols[:, nr:] = rb.reshape(M, nr, nb * nbl).transpose(0, 2, 1)
-        ydot_cols = np.zeros((M, self.n, nr))
-        # rigid rows, one call: perturbations of y at the rigid and root-load columns, then
-        # of ydot at the rigid columns, at every time
-        cols = np.concatenate([rc, kc])
-        P = len(cols) + nr
+        rb = self._blade_residual(np.tile(ydb, (M * nx, 1)),
+                                  np.tile(yb, (M * nx, 1)).astype(complex),
+                                  v.reshape(M * nx * nb, 3), w.reshape(M * nx * nb, 3), g,
+                                  self._air_flat(self._air(q, u, tt, twx), M * nx * nb)
+                                  ).imag / h
+        y_cols = np.zeros((M, self.n, nx))
+        y_cols[:, nr:to] = rb.reshape(M, nx, nb * nbl).transpose(0, 2, 1)
+        ydot_cols = np.zeros((M, self.n, nx))
+        # coupling rows, one call: perturbations of y at xcols and the root loads, then of
+        # ydot at the rate columns, at every time
+        cols_y = np.concatenate([xcols, kc])
+        ny = len(cols_y)
+        P = ny + len(rate_cols)
         Y = np.tile(y.astype(complex), (P, 1))
         Yd = np.tile(ydot.astype(complex), (P, 1))
-        Y[np.arange(len(cols)), cols] += 1j * h
-        Yd[len(cols) + rc, rc] += 1j * h
+        Y[np.arange(ny), cols_y] += 1j * h
+        Yd[ny + np.arange(len(rate_cols)), rate_cols] += 1j * h
         Y, Yd, T = np.tile(Y, (M, 1)), np.tile(Yd, (M, 1)), np.repeat(ts, P)
-        F = Y[:, nr:].reshape(M * P, nb, nbl)
-        d = np.concatenate([self.rigid.kinematics(Y[:, :nq], Yd[:, :nq], Y[:, nq:nr], T),
-                            self.rigid.dynamics(Y[:, :nq], Y[:, nq:nr], Yd[:, nq:nr], T,
-                                                F[:, :, 0:3], F[:, :, 3:6])], axis=1)
-        d = (d.imag / h).reshape(M, P, nr).transpose(0, 2, 1)               # (M, nr, P)
-        y_cols[:, :nr] = d[:, :, :nr]
-        y_rows = d[:, :, nr:len(cols)]
-        ydot_cols[:, :nr] = d[:, :, len(cols):]
+        F = Y[:, nr:to].reshape(M * P, nb, nbl)
+        d = np.concatenate([
+            self.rigid.kinematics(Y[:, :nq], Yd[:, :nq], Y[:, nq:nr], T).reshape(M * P, nq),
+            self.rigid.generalized_forces(Y[:, :nq], Y[:, nq:nr], Yd[:, nq:nr], T,
+                                          F[:, :, 0:3], F[:, :, 3:6],
+                                          self.tower_top(Yd, Y))], axis=1)
+        d = (d.imag / h).reshape(M, P, len(out_rows)).transpose(0, 2, 1)   # (M, rows, P)
+        y_cols[:, out_rows] = d[:, :, :nx]
+        y_rows = d[:, :, nx:ny]
+        ydot_cols[:, out_rows[:, None], np.searchsorted(xcols, rate_cols)[None, :]] = d[:, :, ny:]
         if np.ndim(t) == 0:
             y_cols, ydot_cols, y_rows = y_cols[0], ydot_cols[0], y_rows[0]
-        return {"rigid": rc, "root_loads": kc, "y_cols": y_cols, "ydot_cols": ydot_cols,
-                "y_rows": y_rows}
+        return {"cols": xcols, "rows": out_rows, "row_cols": kc, "y_cols": y_cols,
+                "ydot_cols": ydot_cols, "y_rows": y_rows}
 
     def jacobians_reference(self, ydot, y, t):
         """The same Jacobians by plain coloured complex steps on the whole residual (slow;

@@ -2,10 +2,10 @@
 
 ``(A0 + U V^T)^-1 = A0^-1 - A0^-1 U (I + V^T A0^-1 U)^-1 V^T A0^-1``.  Two uses in hawt:
 
-* the rigid rows and columns of the simulation's Newton matrix, which turn with the azimuth
-  when the yaw is free (hawt_core.solvers.march): ``U = [dA[:, rc], E_rc]``,
-  ``V^T = [E_rc^T; dR]`` with ``dR`` the change of the rigid rows at the columns ``kc`` (the
-  blades' root loads), rank 2 len(rc);
+* the rigid-body coupling's rows and columns of the simulation's Newton matrix, which turn
+  with the azimuth (hawt_core.solvers.march): ``U = [dA[:, cols], E_rows]``,
+  ``V^T = [E_cols^T; dR]`` with ``dR`` the change of the coupling rows at the columns ``kc``
+  (the blades' root loads), rank len(cols) + len(rows);
 * the time-varying rows and columns of the Floquet stage matrices
   (hawt_core.solvers.floquet.lowrank), whose capacitance matrices have blocks of very
   different magnitudes: :func:`equilibrated_solve`.
@@ -20,8 +20,9 @@ __all__ = ["row_column_capacitance", "row_column_correction", "equilibrate_rows_
 
 def row_column_capacitance(Z: np.ndarray, dR: np.ndarray, rc: np.ndarray,
                            kc: np.ndarray) -> np.ndarray:
-    """Inverse of the capacitance ``I + V^T A0^-1 U = I + [Z[rc]; dR Z[kc]]`` of a rigid
-    row/column update, ``Z = A0^-1 U`` (n, 2 r); raises numpy's LinAlgError if singular."""
+    """Inverse of the capacitance ``I + V^T A0^-1 U = I + [Z[rc]; dR Z[kc]]`` of a
+    row/column update (columns ``rc`` replaced, rows changed by ``dR`` at columns ``kc``),
+    ``Z = A0^-1 U`` (n, len(rc) + len(dR)); raises numpy's LinAlgError if singular."""
     cap = np.eye(Z.shape[1]) + np.concatenate([Z[rc], dR @ Z[kc]])
     return np.linalg.inv(cap)
 

@@ -282,14 +282,18 @@ class RigidSystem:
         cached: one residual evaluation asks for it twice, root motion and dynamics; callers
         treat the returned dict as read-only)."""
         q, u, t = np.asarray(q), np.asarray(u), np.asarray(t)
-        key = (q.dtype.str, q.shape, q.tobytes(), u.dtype.str, u.shape, u.tobytes(),
-               t.dtype.str, t.shape, t.tobytes(),
-               None if self.controls is None else (id(self.controls), self.controls.version))
-        cached = getattr(self, "_kin_cache", None)
+        return self._cached("_kin_cache", (q, u, t), lambda: self._kin_uncached(q, u, t))
+
+    def _cached(self, slot, arrays, compute):
+        """The last result of ``compute()`` kept in attribute ``slot``, keyed by the bytes,
+        dtypes and shapes of ``arrays`` (and the controls' version)."""
+        key = tuple((a.dtype.str, a.shape, a.tobytes()) for a in arrays) + (
+            None if self.controls is None else (id(self.controls), self.controls.version),)
+        cached = getattr(self, slot, None)
         if cached is not None and cached[0] == key:
             return cached[1]
-        out = self._kin_uncached(q, u, t)
-        self._kin_cache = (key, out)
+        out = compute()
+        setattr(self, slot, (key, out))
         return out
 
     def _kin_uncached(self, q, u, t):
@@ -349,7 +353,15 @@ class RigidSystem:
         """Flexible-tower kinematics in N: velocities and partial velocities for the speeds
         z = (U1, U2, U3, U4, V_1..3, Omega_1..3) (yaw, teeter, shaft twist, generator, the
         tower top; removed DOFs included, with zero partials).  Batched: q (..., n_q),
-        u (..., n_u), t (...), tower (..., 5, 3); vectors (..., 3), partials (..., 10, 3)."""
+        u (..., n_u), t (...), tower (..., 5, 3); vectors (..., 3), partials (..., 10, 3).
+        The last result is cached (as _kin: root motion, rotor spin and Kane's equations
+        of one residual evaluation ask for the same); callers treat it as read-only."""
+        q, u, t = np.asarray(q), np.asarray(u), np.asarray(t)
+        tw = self._tower_state(tower)
+        return self._cached("_kin_tower_cache", (q, u, t, tw),
+                            lambda: self._kin_tower_uncached(q, u, t, tw))
+
+    def _kin_tower_uncached(self, q, u, t, tower):
         qy, qh, qd, qg = self._split(q, self.n_q)
         U1, U2, U3, U4 = (np.asarray(x) for x in self._split(u, self.n_u))
         tw = self._tower_state(tower)

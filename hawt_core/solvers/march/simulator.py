@@ -331,12 +331,14 @@ class Simulator(StepSolver, SimulationOutputs):
                                      azimuth_updates=self._coupling_varies())
 
     def _coupling_varies(self) -> bool:
-        """True when the rigid rows and columns of the Jacobian change with the azimuth at
-        the starting state (a free yaw: the yaw axis is fixed, the blades turn; gravity;
-        tilt), compared at two azimuths 0.3 revolution apart."""
+        """True when the coupling rows and columns of the Jacobian (TurbineModel.
+        coupling_jacobians) change with the azimuth at the starting state (a free yaw: the
+        yaw axis is fixed, the blades turn; gravity; tilt; a flexible tower: the tower top
+        sees the blades' root loads and moves their roots, both turning with the rotor),
+        compared at two azimuths 0.3 revolution apart."""
         m = self.model
-        if m.nq + m.nu == 0 or getattr(m, "tower", None) is not None \
-                or not hasattr(m, "coupling_jacobians"):
+        if not hasattr(m, "coupling_jacobians") or (
+                m.nq + m.nu == 0 and getattr(m, "tower", None) is None):
             return False
         z = np.zeros(self.n)
         dt = 0.3 * (m.period if np.isfinite(m.period) else 1.0)
