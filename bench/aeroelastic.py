@@ -19,7 +19,7 @@ dR/dy from the Gauss-point integrands' steps and dR/dydot computed once per mode
 dR/dy by the colours, and against both by the colours at every call (same run, ratios),
 and the nonlinear simulation's real-time factor at 8 m/s against a vacuum, frozen wake and
 with Oye's inflow and Jones's lag (8 elements, 1 deg steps; goal >= 5: met with the frozen
-wake, 5.3; not with Oye + Jones, 2.7), and frozen
+wake, 7.2; with Oye + Jones 4.9-5.8), and frozen
 wake on a rigid tower, with the window solver's counts; the Floquet analysis with Oye's
 inflow states against the frozen wake (4 elements, below 10 per-rev).
 """

@@ -19,6 +19,7 @@ from hawt_core.numerics.rotations import q_apply
 from hawt_core.model import Beam, Gravity, Hub, Nacelle, Rotor, SectionTable, Turbine
 from hawt_core.solvers.march import SimulationError, Simulator, parse_perturb
 from hawt_core.solvers.march.window import WindowSolver
+from hawt_core.solvers.march.window_bases import SparseBase
 from tower_turbines import soft_tower_turbine
 
 SEC = dict(mass=67.5772, i1=5, i2=1e-4, i3=4.9999, gj=21.8e3, ei2=4.36e6, ei3=21.8e6)
@@ -512,9 +513,12 @@ def test_window_steps_meet_the_newton_tolerance():
     assert worst < 10 * tol
 
 
-@pytest.mark.parametrize("yaw_free,tower", [(False, False), (True, False), (True, True)],
-                         ids=["yaw-locked", "yaw-free", "yaw-free-flexible-tower"])
-def test_window_solver_equals_step_by_step_newton(yaw_free, tower):
+@pytest.mark.parametrize("yaw_free,tower,sparse",
+                         [(False, False, False), (True, False, False), (True, True, False),
+                          (True, True, True)],
+                         ids=["yaw-locked", "yaw-free", "yaw-free-flexible-tower",
+                              "yaw-free-flexible-tower-sparse"])
+def test_window_solver_equals_step_by_step_newton(yaw_free, tower, sparse):
     """Reference: the step-by-step Newton solver (sparse LU, its own predictor and stopping
     test) on the same implicit-midpoint equations. The time-parallel window solver
     (24 steps per window, dense frozen matrices, the coupling rows and columns updated per
@@ -523,12 +527,14 @@ def test_window_solver_equals_step_by_step_newton(yaw_free, tower):
     agrees to 1e-6 of the variable scales over one revolution at newton_tol = 1e-10 (each
     method leaves errors of about the tolerance per step, which the undamped modes
     accumulate), and it needs fewer Jacobians (the base is reused; the coupling rows and
-    columns are updated by Woodbury's formula)."""
+    columns are updated by Woodbury's formula). The window solver's base dense (inverse and
+    propagator) or sparse (LU and solves; window_bases.py), as the system's size picks."""
     turbine = paper(N=4, yaw_free=yaw_free)
     model = TurbineModel(_on_soft_tower(turbine) if tower else turbine)
     kw = dict(step_deg=1.0, perturb={"teeter": 0.02, **({"yaw_rate": 0.02} if yaw_free else {})},
               newton_tol=1e-10)
     a = Simulator(model, method="window", **kw)
+    a._win.sparse = sparse
     b = Simulator(model, method="step", **kw)
     assert a.method == "window" and b.method == "step"
     a.run(model.period)
@@ -545,6 +551,7 @@ def test_window_solver_equals_step_by_step_newton(yaw_free, tower):
     assert s["window_failures"] == 0
     assert s["jacobian_evaluations"] < b.summary()["jacobian_evaluations"]
     assert (s["window_rigid_updates"] > 0) == (yaw_free or tower)
+    assert isinstance(a._win.base, SparseBase) == sparse
 
 
 def _on_soft_tower(turbine):
@@ -555,8 +562,9 @@ def _on_soft_tower(turbine):
                    nacelle=replace(soft.nacelle, yaw_free=turbine.nacelle.yaw_free))
 
 
+@pytest.mark.parametrize("sparse", [False, True], ids=["dense", "sparse"])
 @pytest.mark.parametrize("tower", [False, True], ids=["rigid-tower", "flexible-tower"])
-def test_window_coupling_update_equals_the_exact_matrix(tower):
+def test_window_coupling_update_equals_the_exact_matrix(tower, sparse):
     """Reference: the exact scaled step matrices A = dG_k/dx_k, B = dG_k/dx_{k-1}
     (TurbineModel.jacobians at the same state, a later time: the blades turned by 0.3
     revolution; free yaw, gravity). After the window solver's Woodbury update
@@ -565,7 +573,8 @@ def test_window_coupling_update_equals_the_exact_matrix(tower):
     coupling rows at the root loads, and the base everywhere else (1e-9 of the largest
     entry); P = -A^-1 B with B's coupling columns exact and the others the base's (1e-9).
     With a flexible tower the coupling's part of the tower's tip rows is added to the
-    tower's own beam terms, which the update must keep."""
+    tower's own beam terms, which the update must keep. Both bases (window_bases.py: dense
+    inverse and propagator, or sparse LU and solves) give the same."""
     turbine = paper(N=3, yaw_free=True, gravity=True)
     model = TurbineModel(_on_soft_tower(turbine) if tower else turbine)
     sim = Simulator(model, step_deg=2.0, record=False, method="window")
@@ -575,10 +584,12 @@ def test_window_coupling_update_equals_the_exact_matrix(tower):
     yn = x[di] + 1e-3 * sim._scale[di] * rng.standard_normal(len(di))
     h, t0, t1 = sim.h, 0.1, 0.1 + 0.3 * model.period
     win = WindowSolver(model, sim._scale, sim.diff, 1e-8, azimuth_updates=True)
+    win.sparse = sparse
     win.refresh(x, yn, t0, h)
-    A0, B0 = win.A0s.copy(), win.Bs0.copy()
+    dense = lambda M: M.toarray() if hasattr(M, "toarray") else np.array(M)
+    A0, B0 = dense(win.base.A0), dense(win.base.B0)
     win.update_rigid(x, yn, t1, h)
-    A1, B1 = win._step_matrices(x, yn, t1, h)
+    A1, B1 = (M.toarray() for M in win._step_matrices(x, yn, t1, h))
     A1 = A1 * (win.row[:, None] * win.sc[None, :])
     B1 = B1 * (win.row[:, None] * win.sc[di][None, :])
     c = model.coupling_jacobians(np.zeros(model.n), x, t1)

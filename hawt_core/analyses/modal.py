@@ -290,7 +290,9 @@ def _hill_floquet(model: TurbineModel, dae: LinearPeriodicDAE, transform, max_pe
     # the rotor period (a multi-blade DAE's own period is T / Nb), nominal at standstill
     T = model.period if np.isfinite(model.period) else STANDSTILL_PERIOD
     omega = 2 * np.pi / T
-    srows = np.unique(rows)
+    # the sample rows in the observed rows' order when they are distinct (periodic_modes then
+    # reads them as a slice, not a gathered copy of every sample)
+    srows = np.asarray(rows) if len(np.unique(rows)) == len(rows) else np.unique(rows)
     pos = {int(r): i for i, r in enumerate(srows)}
     obs = np.array([pos[int(r)] for r in rows])
     frame_rows = rows

@@ -44,10 +44,9 @@ it.  The window is a solver choice, not a different time discretization.
 from __future__ import annotations
 
 import numpy as np
-import scipy.linalg as sla
 import scipy.sparse as sp
 
-from ...numerics.woodbury import row_column_capacitance
+from .window_bases import DenseBase, SingularBase, SparseBase
 
 
 def midpoint_arguments(x, prev, di, h):
@@ -101,6 +100,8 @@ class WindowSolver:
     CALM_CONTRACTION = 0.03
     #: shortest window (steps)
     MIN_STEPS = 2
+    #: systems with at least this many unknowns use the sparse base (window_bases.py)
+    SPARSE_FROM = 600
 
     def __init__(self, model, scale, diff, tol, max_steps=24, max_iter=10,
                  azimuth_updates=True):
@@ -115,7 +116,10 @@ class WindowSolver:
         self.azimuth_updates = bool(azimuth_updates)
         self._c0 = None                 # the coupling blocks at the base (update_rigid)
         self.h = None
-        self._lu = None                 # the base's dense LU, formed on first use (_lu0)
+        #: the frozen matrices (window_bases.DenseBase or SparseBase), set by refresh
+        self.base = None
+        #: sparse LU and solves instead of dense inverses: from SPARSE_FROM unknowns
+        self.sparse = self.n >= self.SPARSE_FROM
         self.base_age = 0
         self.pending_refresh = True
         #: window length (steps) for the next window: adapted between MIN_STEPS and
@@ -139,30 +143,33 @@ class WindowSolver:
 
     # ------------------------------------------------------------------ matrices
     def _step_matrices(self, x, yn, tm, h):
-        """Exact dG/dx_k (A) and dG/dx_{k-1} on the differential columns (B), dense."""
+        """Exact dG/dx_k (A) and dG/dx_{k-1} on the differential columns (B), sparse."""
         Jy, Jd = self.model.jacobians(*midpoint_arguments(x, yn, self.di, h), tm)
-        Jy, Jd = Jy.toarray(), Jd.toarray()
+        Jy, Jd = sp.csc_matrix(Jy), sp.csc_matrix(Jd)
         A = step_matrix(Jy, Jd, self.diff, h)
         B = (0.5 * Jy - Jd / h)[:, self.di]
-        return A, B
+        return sp.csr_matrix(A), sp.csr_matrix(B)
 
     def refresh(self, x, yn, tm, h):
-        """New base: exact step matrices at the step unknowns x (midpoint time tm), scaled;
-        their dense inverse (windows of several steps) or LU (one step) formed when first
-        needed."""
+        """New base: exact step matrices at the step unknowns x (midpoint time tm), scaled
+        (rows by their largest entry, unknowns by their size), dense or sparse
+        (``self.sparse``, window_bases.py)."""
         A, B = self._step_matrices(x, yn, tm, h)
-        As = A * self.sc[None, :]
-        if not np.all(np.isfinite(As)):
+        As = A @ sp.diags(self.sc)
+        if not np.all(np.isfinite(As.data)) or not np.all(np.isfinite(B.data)):
             raise WindowFailure("non-finite Newton matrix")
-        rmax = np.abs(As).max(axis=1)
+        rmax = abs(As).max(axis=1).toarray().ravel()
         rmax[rmax == 0] = 1.0
         self.row = 1.0 / rmax
-        As *= self.row[:, None]
-        Bs = B * (self.row[:, None] * self.sc[self.di][None, :])
-        self.A0s, self.Bs0, self._lu = As, Bs, None
-        self.Ainv0 = self.P0 = self.P0d = self._lowrank = None
-        if self.azimuth_updates:        # the rigid-body updates need the inverse and the
-            self._form_inverse()        # coupling blocks the base was formed with
+        As = sp.diags(self.row) @ As
+        Bs = sp.diags(self.row) @ B @ sp.diags(self.sc[self.di])
+        self.base = None
+        try:
+            self.base = (SparseBase(As, Bs, self.di) if self.sparse
+                         else DenseBase(As.toarray(), Bs.toarray(), self.di))
+        except SingularBase as exc:
+            raise WindowFailure(str(exc)) from exc
+        if self.azimuth_updates:        # the coupling blocks the base was formed with
             self._next_coupling = None
             self._c0 = self.model.coupling_jacobians(*midpoint_arguments(x, yn, self.di, h),
                                                      tm)
@@ -210,68 +217,19 @@ class WindowSolver:
         dAc = (dyd / h + 0.5 * dy) * rs
         dBc = (0.5 * dy - dyd / h) * rs
         dR = (c["y_rows"] - c0["y_rows"]) * (self.row[rows][:, None] * self.sc[kc][None, :])
-        Ainv0, P0 = self.Ainv0, self.P0
-        p = len(cols)
-        # A = A0 + U V^T, U = [dAc, E_rows], V^T = [E_cols^T; dR at columns kc]
-        AU = Ainv0 @ np.concatenate([dAc, dBc], axis=1)                      # one product
-        Z = np.concatenate([AU[:, :p], Ainv0[:, rows]], axis=1)               # A0^-1 U
-        W = np.concatenate([Ainv0[cols], dR @ Ainv0[kc]], axis=0)             # V^T A0^-1
         try:
-            ZC = Z @ row_column_capacitance(Z, dR, cols, kc)
-        except np.linalg.LinAlgError as exc:
-            raise WindowFailure(f"singular rigid-body update ({exc})") from exc
-        # A^-1 = A0^-1 - ZC W, kept factored; P = -A^-1 B with B = B0 + dBc on the coupling
-        # columns: P = P0 + ZC W B0 - A^-1 dBc E_pos^T, where W B0 = -[P0[cols]; dR P0[kc]]
-        # (P0 = -A0^-1 B0): a rank len(cols) + len(rows) + len(pos) update of P0
-        Y = AU[:, p:] - ZC @ (W @ dBc)                                        # A^-1 dBc
-        WB = -np.concatenate([P0[cols], dR @ P0[kc]], axis=0)
-        Vt = np.zeros((WB.shape[0] + p, len(self.di)))
-        Vt[:WB.shape[0]] = WB
-        Vt[WB.shape[0] + np.arange(p), pos] = 1.0
-        U = np.concatenate([ZC, -Y], axis=1)
-        if not all(np.all(np.isfinite(a)) for a in (ZC, W, U, Vt)):
-            raise WindowFailure("non-finite rigid-body update")
-        self._lowrank = (ZC, W, U, np.ascontiguousarray(U[self.di]), Vt)
+            self.base.update(dAc, dBc, dR, cols, rows, kc, pos)
+        except SingularBase as exc:
+            raise WindowFailure(str(exc)) from exc
         self.updates += 1
 
     def inverse(self):
         """The current A^-1 (scaled; base and update), dense: for tests and diagnostics."""
-        if self._lowrank is None:
-            return self.Ainv0
-        ZC, W = self._lowrank[:2]
-        return self.Ainv0 - ZC @ W
+        return self.base.inverse()
 
     def propagator(self):
         """The current P = -A^-1 B (scaled; base and update), dense: tests and diagnostics."""
-        if self._lowrank is None:
-            return self.P0
-        U, Vt = self._lowrank[2], self._lowrank[4]
-        return self.P0 + U @ Vt
-
-    def _lu0(self):
-        """The base's dense LU (windows of one step: a controller step of the closed loop),
-        formed on first use."""
-        if self._lu is None:
-            try:
-                self._lu = sla.lu_factor(self.A0s, check_finite=False)
-            except (ValueError, sla.LinAlgError) as exc:
-                raise WindowFailure(f"singular Newton matrix ({exc})") from exc
-        return self._lu
-
-    def _form_inverse(self):
-        """The base's inverse and propagator P = -A^-1 B (dense), formed only when needed:
-        windows of one step use the LU alone.  LAPACK's getrf + getri (scipy.linalg.inv),
-        not the LU's solve against the identity: 1.6x faster (bench: 31 vs 50 ms at 650
-        unknowns, one thread)."""
-        try:
-            Ainv = sla.inv(self.A0s, check_finite=False)
-        except (ValueError, sla.LinAlgError) as exc:
-            raise WindowFailure(f"singular Newton matrix ({exc})") from exc
-        if not np.all(np.isfinite(Ainv)):
-            raise WindowFailure("singular Newton matrix")
-        self.Ainv0, self.P0 = Ainv, -Ainv @ self.Bs0
-        self.P0d = np.ascontiguousarray(self.P0[self.di])
-        self._lowrank = None
+        return self.base.propagator()
 
     # ------------------------------------------------------------------ iteration
     def _rates_and_midpoint(self, X, yn, h):
@@ -291,27 +249,12 @@ class WindowSolver:
         return self.model.residual(ydot, ym, tm)
 
     def _correction(self, G):
-        """Scaled Newton correction of the whole window: d_k = -A^-1 G_k + P d_{k-1}.
-        The recurrence runs on the differential part only (P's rows there, contiguous);
-        the other rows follow in one product."""
-        if self.Ainv0 is None:          # one step, the base's LU (solve: window of K > 1)
-            return sla.lu_solve(self._lu0(), (G * (-self.row)).T).T
-        Gs = G * (-self.row)
-        D = Gs @ self.Ainv0.T
-        lr = self._lowrank
-        if lr is not None:              # the coupling update, factored (update_rigid)
-            ZC, W, U, Ud, Vt = lr
-            D -= (Gs @ W.T) @ ZC.T
-        Dd = D[:, self.di]
-        P0d = self.P0d
-        for k in range(1, D.shape[0]):
-            Dd[k] += P0d @ Dd[k - 1]
-            if lr is not None:
-                Dd[k] += Ud @ (Vt @ Dd[k - 1])
-        D[1:] += Dd[:-1] @ self.P0.T
-        if lr is not None:
-            D[1:] += (Dd[:-1] @ Vt.T) @ U.T
-        return D
+        """Scaled Newton correction of the whole window: d_k = A^-1 (-G_k - B d_{k-1})
+        (window_bases.py)."""
+        try:
+            return self.base.correction(G * (-self.row))
+        except SingularBase as exc:
+            raise WindowFailure(str(exc)) from exc
 
     def solve(self, yn, z0, t0, h, K):
         """Solve the window of K steps from the grid values ``yn`` (differential unknowns at
@@ -328,8 +271,6 @@ class WindowSolver:
         elif self.azimuth_updates:
             # the next window (same length) reuses values computed now at its centre
             self.update_rigid(xc, yn, tc, h, t_next=tc + K * h)
-        if K > 1 and self.Ainv0 is None:
-            self._form_inverse()
         self.base_age += 1
         dn_old = None
         theta = 0.0
