@@ -23,9 +23,10 @@ simplified Newton: three to six iterations per window from a constant start (the
 is the linearized propagation over the window; the NREL 5-MW in wind with gravity, 12 steps
 of 1 deg: 5.6 at newton_tol 1e-8).
 
-The matrices are dense and scaled (rows by their largest entry, unknowns by their
-characteristic size).  ``A^-1`` and ``P`` are formed from an exact Jacobian (the *base*) and
-refreshed when the iteration contracts slowly.  The rows and columns of the rigid-body
+The matrices are scaled (rows by their largest entry, unknowns by their characteristic
+size) and formed from an exact Jacobian (the *base*), refreshed when the iteration contracts
+slowly: ``A^-1`` and ``P`` dense for small systems, a sparse LU of ``A`` (one solve per step)
+from SPARSE_FROM unknowns (window_bases.py).  The rows and columns of the rigid-body
 coupling vary with the azimuth (the blades turn; the yaw axis and the tower do not): a free
 yaw, gravity and tilt turn the rigid unknowns' columns, and a flexible tower's top sees the
 turning root loads and moves the turning roots.  Every window then replaces them by their
