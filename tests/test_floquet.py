@@ -316,6 +316,32 @@ def test_fourier_series_reproduces_coefficients():
     assert abs(fc2.A(1.234) - dae2.A(1.234)).max() < 1e-11
 
 
+def test_fourier_levels_are_nested_and_exact_for_polynomials():
+    """Reference: a trigonometric polynomial of degree 10 in A(t) (entries with one sparse
+    pattern at some times and another at others: a time-varying zero), and the sampling
+    rule of FourierCoefficients' nested grids 5, 15, 30 (every check time of a level lies on
+    the next grid): the series reproduces A at arbitrary times to 1e-13 of its size, with
+    10 harmonics kept, from exactly 30 + 4 evaluations (the last level's 4 check times are
+    the only samples off its grid; separate grids would take 5 + 15 + 30 + 12)."""
+    E = sp.identity(3, format="csc")
+    calls = []
+
+    def A(t):
+        calls.append(t)
+        c = [math.cos(k * t + 0.3 * k) / (1 + k) for k in range(11)]
+        a = np.array([[0.0, 1.0, 0.2 * math.sin(3 * t)],     # exactly 0 at t = 0: the
+                      [-2.0 - sum(c), 0.1 * c[10], 0.0],        # sample there has a smaller
+                      [c[2], 0.0, -1.0 + c[7] - c[3]]])         # pattern (the union's job)
+        return sp.csc_matrix(a)
+    dae = LinearPeriodicDAE(lambda t: E, A, 2 * math.pi, [1, 1, 1])
+    fc = dae.fourier(tol=1e-12)
+    assert fc.samples == 30 and fc.harmonics_kept == 10
+    assert fc.evaluations == 34 and len(set(round(t / (2 * math.pi), 12) for t in calls)) == 34
+    for t in (0.123, 2.5, 5.9):
+        ref = A(t).toarray()
+        assert np.abs(fc.A(t).toarray() - ref).max() < 1e-13 * np.abs(ref).max()
+
+
 def test_default_method_needs_far_fewer_steps():
     """Steps per period for <= 1e-6 relative frequency error (reference: Radau with 2048 steps)
     on the chain rotor (highest mode ~7/rev): Radau IIA needs at least 8x fewer steps than the
