@@ -47,7 +47,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from .window_bases import DenseBase, SingularBase, SparseBase
+from .window_bases import DenseBase, SparseBase, WindowFailure
 
 
 def midpoint_arguments(x, prev, di, h):
@@ -73,10 +73,6 @@ def step_matrix(Jy, Jd, diff, h):
     if sp.issparse(Jy):
         return Jd @ sp.diags(cd) + Jy @ sp.diags(cy)
     return Jd * cd[None, :] + Jy * cy[None, :]
-
-
-class WindowFailure(RuntimeError):
-    """The window iteration did not converge (the caller falls back to single steps)."""
 
 
 class WindowSolver:
@@ -164,12 +160,9 @@ class WindowSolver:
         self.row = 1.0 / rmax
         As = sp.diags(self.row) @ As
         Bs = sp.diags(self.row) @ B @ sp.diags(self.sc[self.di])
-        self.base = None
-        try:
-            self.base = (SparseBase(As, Bs, self.di) if self.sparse
-                         else DenseBase(As.toarray(), Bs.toarray(), self.di))
-        except SingularBase as exc:
-            raise WindowFailure(str(exc)) from exc
+        self.base = None                # a failed factorization leaves no stale base
+        self.base = (SparseBase(As, Bs, self.di) if self.sparse
+                     else DenseBase(As.toarray(), Bs.toarray(), self.di))
         if self.azimuth_updates:        # the coupling blocks the base was formed with
             self._next_coupling = None
             self._c0 = self.model.coupling_jacobians(*midpoint_arguments(x, yn, self.di, h),
@@ -218,10 +211,7 @@ class WindowSolver:
         dAc = (dyd / h + 0.5 * dy) * rs
         dBc = (0.5 * dy - dyd / h) * rs
         dR = (c["y_rows"] - c0["y_rows"]) * (self.row[rows][:, None] * self.sc[kc][None, :])
-        try:
-            self.base.update(dAc, dBc, dR, cols, rows, kc, pos)
-        except SingularBase as exc:
-            raise WindowFailure(str(exc)) from exc
+        self.base.update(dAc, dBc, dR, cols, rows, kc, pos)
         self.updates += 1
 
     def inverse(self):
@@ -252,10 +242,7 @@ class WindowSolver:
     def _correction(self, G):
         """Scaled Newton correction of the whole window: d_k = A^-1 (-G_k - B d_{k-1})
         (window_bases.py)."""
-        try:
-            return self.base.correction(G * (-self.row))
-        except SingularBase as exc:
-            raise WindowFailure(str(exc)) from exc
+        return self.base.correction(G * (-self.row))
 
     def solve(self, yn, z0, t0, h, K):
         """Solve the window of K steps from the grid values ``yn`` (differential unknowns at

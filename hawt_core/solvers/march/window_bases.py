@@ -32,8 +32,9 @@ import scipy.sparse.linalg as spla
 from ...numerics.woodbury import row_column_capacitance
 
 
-class SingularBase(RuntimeError):
-    """The frozen step matrix is singular or not finite (the caller refreshes or falls back)."""
+class WindowFailure(RuntimeError):
+    """The window iteration did not converge, or its frozen matrices are singular or not
+    finite (the caller refreshes the base or falls back to single steps)."""
 
 
 class DenseBase:
@@ -55,9 +56,9 @@ class DenseBase:
         try:
             Ainv = sla.inv(self.A0, check_finite=False)
         except (ValueError, sla.LinAlgError) as exc:
-            raise SingularBase(f"singular Newton matrix ({exc})") from exc
+            raise WindowFailure(f"singular Newton matrix ({exc})") from exc
         if not np.all(np.isfinite(Ainv)):
-            raise SingularBase("singular Newton matrix")
+            raise WindowFailure("singular Newton matrix")
         self.Ainv0, self.P0 = Ainv, -Ainv @ self.B0
         self.P0d = np.ascontiguousarray(self.P0[self.di])
 
@@ -66,7 +67,7 @@ class DenseBase:
             try:
                 self._lu = sla.lu_factor(self.A0, check_finite=False)
             except (ValueError, sla.LinAlgError) as exc:
-                raise SingularBase(f"singular Newton matrix ({exc})") from exc
+                raise WindowFailure(f"singular Newton matrix ({exc})") from exc
         return self._lu
 
     def update(self, dAc, dBc, dR, cols, rows, kc, pos):
@@ -81,7 +82,7 @@ class DenseBase:
         try:
             ZC = Z @ row_column_capacitance(Z, dR, cols, kc)
         except np.linalg.LinAlgError as exc:
-            raise SingularBase(f"singular rigid-body update ({exc})") from exc
+            raise WindowFailure(f"singular rigid-body update ({exc})") from exc
         # A^-1 = A0^-1 - ZC W, kept factored; P = -A^-1 B: P = P0 + ZC W B0 - A^-1 dBc
         # E_pos^T, where W B0 = -[P0[cols]; dR P0[kc]] (P0 = -A0^-1 B0): a rank
         # len(cols) + len(rows) + len(pos) update of P0
@@ -92,7 +93,7 @@ class DenseBase:
         Vt[WB.shape[0] + np.arange(p), pos] = 1.0
         U = np.concatenate([ZC, -Y], axis=1)
         if not all(np.all(np.isfinite(a)) for a in (ZC, W, U, Vt)):
-            raise SingularBase("non-finite rigid-body update")
+            raise WindowFailure("non-finite rigid-body update")
         self._lowrank = (ZC, W, U, np.ascontiguousarray(U[self.di]), Vt)
 
     def correction(self, Gs: np.ndarray) -> np.ndarray:
@@ -147,7 +148,7 @@ class SparseBase:
         try:
             self._lu = spla.splu(self.A0, permc_spec="COLAMD")
         except RuntimeError as exc:            # SuperLU: "Factor is exactly singular"
-            raise SingularBase(f"singular Newton matrix ({exc})") from exc
+            raise WindowFailure(f"singular Newton matrix ({exc})") from exc
         self._lowrank = None
 
     def update(self, dAc, dBc, dR, cols, rows, kc, pos):
@@ -159,9 +160,9 @@ class SparseBase:
         try:
             ZC = Z @ row_column_capacitance(Z, dR, cols, kc)
         except np.linalg.LinAlgError as exc:
-            raise SingularBase(f"singular rigid-body update ({exc})") from exc
+            raise WindowFailure(f"singular rigid-body update ({exc})") from exc
         if not (np.all(np.isfinite(ZC)) and np.all(np.isfinite(dBc))):
-            raise SingularBase("non-finite rigid-body update")
+            raise WindowFailure("non-finite rigid-body update")
         self._lowrank = (ZC, dR, cols, kc, dBc, pos)
 
     def _solve(self, b):
