@@ -556,15 +556,16 @@ def test_window_solver_equals_step_by_step_newton(yaw_free, tower, sparse):
 
 def _on_soft_tower(turbine):
     """The turbine's rotor on the soft tower of tests/tower_turbines.py (its hub and
-    nacelle, the turbine's yaw setting)."""
+    nacelle, the turbine's teeter and yaw settings)."""
     soft = soft_tower_turbine()
-    return replace(turbine, tower=soft.tower, hub=soft.hub,
+    return replace(turbine, tower=soft.tower, hub=replace(soft.hub, teeter=turbine.hub.teeter),
                    nacelle=replace(soft.nacelle, yaw_free=turbine.nacelle.yaw_free))
 
 
 @pytest.mark.parametrize("sparse", [False, True], ids=["dense", "sparse"])
-@pytest.mark.parametrize("tower", [False, True], ids=["rigid-tower", "flexible-tower"])
-def test_window_coupling_update_equals_the_exact_matrix(tower, sparse):
+@pytest.mark.parametrize("tower,blades", [(False, 2), (True, 2), (True, 3)],
+                         ids=["rigid-tower", "flexible-tower", "flexible-tower-3-blades"])
+def test_window_coupling_update_equals_the_exact_matrix(tower, blades, sparse):
     """Reference: the exact scaled step matrices A = dG_k/dx_k, B = dG_k/dx_{k-1}
     (TurbineModel.jacobians at the same state, a later time: the blades turned by 0.3
     revolution; free yaw, gravity). After the window solver's Woodbury update
@@ -574,8 +575,11 @@ def test_window_coupling_update_equals_the_exact_matrix(tower, sparse):
     entry); P = -A^-1 B with B's coupling columns exact and the others the base's (1e-9).
     With a flexible tower the coupling's part of the tower's tip rows is added to the
     tower's own beam terms, which the update must keep. Both bases (window_bases.py: dense
-    inverse and propagator, or sparse LU and solves) give the same."""
-    turbine = paper(N=3, yaw_free=True, gravity=True)
+    inverse and propagator, or sparse LU and solves) give the same; two teetering blades,
+    or three on a rigid hub."""
+    turbine = paper(N=3, yaw_free=True, gravity=True, teeter=blades == 2)
+    if blades != 2:
+        turbine = replace(turbine, rotor=replace(turbine.rotor, blades=blades))
     model = TurbineModel(_on_soft_tower(turbine) if tower else turbine)
     sim = Simulator(model, step_deg=2.0, record=False, method="window")
     rng = np.random.default_rng(7)
