@@ -361,10 +361,10 @@ class RigidSystem:
         return self._cached("_kin_tower_cache", (q, u, t, tw),
                             lambda: self._kin_tower_uncached(q, u, t, tw))
 
-    def _kin_tower_uncached(self, q, u, t, tower):
+    def _kin_tower_uncached(self, q, u, t, tw):
+        """_kin_tower without the cache; ``tw`` already checked (_tower_state, (..., 5, 3))."""
         qy, qh, qd, qg = self._split(q, self.n_q)
         U1, U2, U3, U4 = (np.asarray(x) for x in self._split(u, self.n_u))
-        tw = self._tower_state(tower)
         fr = self.frames(q, t, tw)
         Tt, Y, S, H = fr["T"], fr["Y"], fr["S"], fr["H"]
         y1, s3, h2 = Y[..., :, 0], S[..., :, 2], H[..., :, 1]
