@@ -432,9 +432,11 @@ def schedule_args(p):
                              ("--tsr-opt", "-", "region-2 tip-speed ratio"),
                              ("--efficiency", "%", "generator efficiency"),
                              ("--fine-pitch", "deg", "below-rated pitch")):
+        # argparse %-formats help strings: a literal "%" is written "%%"
         p.add_argument(flag, type=finite_float(flag, unit=unit), default=None,
-                       metavar=unit.upper() if unit != "-" else "X",
-                       help=f"{what} [{unit}] (overrides the controller file's)")
+                       metavar={"-": "X", "%": "PERCENT"}.get(unit, unit.upper()),
+                       help=f"{what} [{unit.replace('%', '%%')}] (overrides the controller "
+                            "file's)")
 
 
 @cmd_operating_points.arguments
