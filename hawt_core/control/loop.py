@@ -27,6 +27,7 @@ from ..numerics.rotations import rot1
 from ..rigid import ControlInputs
 from ..solvers.march import SimulationError, Simulator
 from ..solvers.periodic import periodic_steady_state
+from ..solvers.equilibrium import NoEquilibrium
 from ..solvers.steady import constant_steady_state
 from .discon import Measurements
 
@@ -96,6 +97,8 @@ def initial_state(model) -> np.ndarray:
     t = 0 with INITIAL_HARMONICS harmonics."""
     try:
         return constant_steady_state(model)
+    except NoEquilibrium:
+        raise
     except ValueError:
         ps = periodic_steady_state(model, harmonics=INITIAL_HARMONICS,
                                    max_harmonics=INITIAL_HARMONICS,

@@ -33,6 +33,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spl
 
 from ..numerics.newton import ConvergenceError, newton
+from .equilibrium import check_equilibrium_exists
 from .steady import constant_steady_state, ignorable_columns
 
 
@@ -104,15 +105,17 @@ def periodic_steady_state(model, harmonics: int = 8, tol: float = 1e-9, max_iter
     blade-relabelling symmetry, see the module docstring) until the residual
     between the collocation times is below ``interpolation_tol`` relative to the load scale
     (default the model's ``interpolation_tol``, else INTERPOLATION_TOL).
-    Raises ConvergenceError when Newton does not converge."""
+    Raises ConvergenceError when Newton does not converge, and NoEquilibrium (a ValueError,
+    in a fraction of a second) when no steady state can exist (solvers/equilibrium.py)."""
     if interpolation_tol is None:
         interpolation_tol = getattr(model, "interpolation_tol", INTERPOLATION_TOL)
     if model.rotor_speed <= 0:
         raise ValueError(f"rotor_speed: {model.rotor_speed} is not allowed for a periodic "
                          "steady state; need > 0 [rad/s]")
+    check_equilibrium_exists(model)
     if not _gravity_turns(model):
         try:
-            y = constant_steady_state(model)
+            y = constant_steady_state(model, check=False)
             return PeriodicSteadyState(times=np.array([0.0]), states=y[None],
                                        period=model.period, iterations=0, constant=True)
         except (ValueError, ConvergenceError):
@@ -218,6 +221,24 @@ def homotopy_turbine(turbine, lam: float):
     return out
 
 
+def _homotopy_description(turbine) -> str:
+    """What homotopy_turbine scales, for this turbine."""
+    parts = (["gravity x lam"] if turbine.gravity.enabled else []) + \
+        (["free-yaw inertia / lam"] if turbine.nacelle.yaw_free else [])
+    return ", ".join(parts)
+
+
+def _continuation_hint(turbine) -> str:
+    """Advice fitting the turbine's own degrees of freedom (none for what it lacks)."""
+    if turbine.nacelle.yaw_free and not turbine.nacelle.yaw_stiffness:
+        return (" (an unbalanced rotor on a free yaw bearing without a spring may have none; "
+                "yaw damping, a yaw spring or hub.counterweight_mass help)")
+    if turbine.nacelle.yaw_free:
+        return (" (a soft yaw spring under an unbalanced rotor may have none; a stiffer "
+                "nacelle.yaw_stiffness or a balanced rotor helps)")
+    return " (try more harmonics, a finer mesh, or a rotor speed away from a resonance)"
+
+
 def _continuation(model, harmonics, tol, max_iter, progress, first_error, symmetry=None):
     """Harmonic balance by natural-parameter continuation from a weakly forced turbine
     (homotopy_turbine at CONTINUATION_START) to the turbine itself, each solution the next
@@ -239,11 +260,9 @@ def _continuation(model, harmonics, tol, max_iter, progress, first_error, symmet
                 raise ConvergenceError(
                     f"periodic steady state: Newton did not converge from the rotor in rigid "
                     f"rotation ({first_error}), and a continuation from a weakly forced "
-                    f"turbine (gravity x lam, free-yaw inertia / lam, lam from "
-                    f"{CONTINUATION_START:g} to 1) stalled at lam = {where}: no periodic "
-                    "steady state near that family (an unbalanced rotor on a free yaw bearing "
-                    "may have none; yaw damping, a yaw spring or hub.counterweight_mass help)"
-                ) from None
+                    f"turbine ({_homotopy_description(T0)}, lam from {CONTINUATION_START:g} "
+                    f"to 1) stalled at lam = {where}: no periodic steady state near that "
+                    f"family{_continuation_hint(T0)}") from None
             step = float(np.sqrt(step))
             lam = min(1.0, last * step)
             continue

@@ -6,6 +6,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..numerics.newton import newton
+from .equilibrium import check_equilibrium_exists
 
 __all__ = ["constant_steady_state", "is_time_invariant_at", "ignorable_columns"]
 
@@ -24,14 +25,18 @@ def ignorable_columns(J, rtol=1e-12) -> np.ndarray:
     colmax = np.abs(sp.csc_matrix(J)).max(axis=0).toarray().ravel()
     return np.flatnonzero(colmax <= rtol * max(colmax.max(initial=0.0), 1e-300))
 
-def constant_steady_state(model, tol=1e-10) -> np.ndarray:
+def constant_steady_state(model, tol=1e-10, check: bool = True) -> np.ndarray:
     """The steady state of a TurbineModel, constant in the rotating frame (no gravity, symmetric
     rotor).
 
     Ignorable coordinates (a free yaw angle: its column of dR/dy is zero) are held at
     their initial value. Raises ConvergenceError if Newton fails, and ValueError if the
-    steady state is periodic rather than constant.
+    steady state is periodic rather than constant; NoEquilibrium (a ValueError) up front
+    when no steady state can exist (solvers/equilibrium.py; ``check`` False: the caller
+    checked).
     """
+    if check:
+        check_equilibrium_exists(model)
     z = np.zeros(model.n)
     fun = lambda y: model.residual(z, y, 0.0)
     y0 = model.initial_guess()

@@ -47,6 +47,7 @@ import numpy as np
 from ...numerics.checks import check_number, check_step_deg
 from ...numerics.jacobian import ColouredJacobian
 from ...numerics.threads import blas_threads
+from ..equilibrium import NoEquilibrium
 from ..steady import constant_steady_state
 from .initial import (SimulationError, blade_rows, check_perturbation, consistent_state,
                       mode_delta, rigid_speed_map)
@@ -199,6 +200,8 @@ class Simulator(StepSolver, SimulationOutputs):
         try:
             y = constant_steady_state(m)
             return y, np.zeros(self.n)
+        except NoEquilibrium:
+            raise
         except ValueError:
             from ..periodic import periodic_steady_state
             ss = periodic_steady_state(m, harmonics=harmonics)
