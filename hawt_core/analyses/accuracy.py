@@ -17,14 +17,17 @@ the cost for sparse models) and attaches ``frequency_error`` (relative, signed: 
 minus reported, over reported) to every mode it can match by label (family, symmetry,
 index); ``converge(run, n0, tol)`` raises N (by the second-order law, 1.25x to 2.5x a step)
 until every matched mode's estimated error is below ``tol``.  A flexible tower is refined with
-the blades (its elements scaled by the same factor).
+the blades (its elements scaled by the same factor).  The modes the tolerance applies to
+are the caller's (``in_scope``: the command line's --count / --max-hz, by default the modes
+it prints): a mesh's highest modes are never converged, and a torsion mode at 60 Hz must not
+hold the flap modes' mesh hostage; the mode that limits the mesh is named.
 """
 from __future__ import annotations
 
 import math
 from typing import Callable, Optional
 
-__all__ = ["richardson", "with_error_estimates", "converge", "check_accuracy",
+__all__ = ["richardson", "with_error_estimates", "converge", "check_accuracy", "mode_name",
            "MAX_ELEMENTS_CHOSEN", "ACCURACY_RANGE"]
 
 #: Largest mesh ``converge`` goes to (elements per blade).
@@ -55,11 +58,21 @@ def _key(m):
     return (m.family, getattr(m, "symmetry", None), m.index)
 
 
-def attach_errors(coarse, fine, n_coarse: int, n_fine: int) -> float:
+def mode_name(m) -> str:
+    """A mode's name for messages: "torsion 12 (59.15 Hz)"."""
+    sym = getattr(m, "symmetry", None)
+    words = " ".join(str(w) for w in (m.family, sym, m.index) if w not in (None, ""))
+    return f"{words} ({m.frequency_hz:.4g} Hz)"
+
+
+def attach_errors(coarse, fine, n_coarse: int, n_fine: int,
+                  in_scope: Optional[Callable[[object], bool]] = None) -> float:
     """Set ``frequency_error`` on ``fine``'s modes from ``coarse`` (matched by label; zero
-    frequencies and unmatched modes get None); returns the largest |error| (0 if none)."""
+    frequencies and unmatched modes get None); returns the largest |error| (0 if none) of
+    the modes ``in_scope(mode)`` selects (default: every mode), and records that mode's
+    name in ``settings["error_estimate"]["limiting_mode"]``."""
     by_key = {_key(m): m for m in coarse.modes}
-    worst = 0.0
+    worst, limiting = 0.0, None
     for m in fine.modes:
         c = by_key.get(_key(m))
         if c is None or not m.frequency_hz > 1e-9 or not c.frequency_hz > 1e-9:
@@ -67,10 +80,13 @@ def attach_errors(coarse, fine, n_coarse: int, n_fine: int) -> float:
             continue
         e = richardson(c.frequency_hz, m.frequency_hz, n_coarse, n_fine)
         m.frequency_error = float(e)
-        worst = max(worst, abs(e))
+        if (in_scope is None or in_scope(m)) and abs(e) >= worst:
+            worst, limiting = abs(e), m
     fine.settings["error_estimate"] = {"method": "Richardson (second order)",
                                        "elements": [int(n_coarse), int(n_fine)],
-                                       "largest_relative_error": worst}
+                                       "largest_relative_error": worst,
+                                       "limiting_mode": None if limiting is None
+                                       else mode_name(limiting)}
     return worst
 
 
@@ -86,19 +102,24 @@ def with_error_estimates(run: Callable[[int], object], n: int):
 
 
 def converge(run: Callable[[int], object], n0: int, tol: float,
-             progress: Optional[Callable[[str], None]] = None):
-    """The result of ``run(N)`` with N raised from ``n0`` until every matched frequency's
-    estimated relative error is <= ``tol``; ValueError if it would exceed
-    MAX_ELEMENTS_CHOSEN, and ValueError for a ``tol`` outside ACCURACY_RANGE."""
+             progress: Optional[Callable[[str], None]] = None,
+             in_scope: Optional[Callable[[object], bool]] = None, scope: str = "every mode"):
+    """The result of ``run(N)`` with N raised from ``n0`` until the estimated relative error
+    of every matched mode ``in_scope(mode)`` selects (default: every mode of the result;
+    ``scope`` says which in messages, e.g. "the 10 lowest modes") is <= ``tol``.
+    ValueError if that would exceed MAX_ELEMENTS_CHOSEN (naming the mode that limits it),
+    and for a ``tol`` outside ACCURACY_RANGE."""
     tol = check_accuracy(tol)
     n_prev = max(1, int(n0) // 2)
     prev = run(n_prev)
     n = max(n_prev + 1, int(n0))
     while True:
         res = run(n)
-        worst = attach_errors(prev, res, n_prev, n)
+        worst = attach_errors(prev, res, n_prev, n, in_scope)
+        limiting = res.settings["error_estimate"]["limiting_mode"]
         if progress is not None:
-            progress(f"{n} elements: largest estimated error {worst:.2e}")
+            progress(f"{n} elements: largest estimated error {worst:.2e}"
+                     + (f" ({limiting})" if limiting else ""))
         if worst <= tol:
             res.settings["accuracy"] = tol
             return res
@@ -107,6 +128,9 @@ def converge(run: Callable[[int], object], n0: int, tol: float,
         grow = min(2.5, max(1.25, math.sqrt(worst / tol) * 1.05))
         n_next = int(math.ceil(n * grow))
         if n_next > MAX_ELEMENTS_CHOSEN:
-            raise ValueError(f"accuracy: {tol:g} needs more than {MAX_ELEMENTS_CHOSEN} elements "
-                             f"per blade (estimated error {worst:.2e} at {n}); ask for less")
+            raise ValueError(
+                f"accuracy: {tol:g} for {scope} needs more than {MAX_ELEMENTS_CHOSEN} "
+                f"elements per blade: the mode {limiting} is still at an estimated "
+                f"{worst:.2e} at {n} elements; ask for fewer modes (--count N, --max-hz F) or "
+                "a larger tolerance")
         prev, n_prev, n = res, n, n_next

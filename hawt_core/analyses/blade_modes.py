@@ -34,7 +34,8 @@ DEFAULT_SPARSE_COUNT = 30
 
 def blade_modes(turbine: Turbine, elements: Optional[int] = None,
                 rotor_speed: Optional[float] = None, count: Optional[int] = None,
-                method: str = "auto", band_factor: float = 100.0) -> BladeModesResult:
+                method: str = "auto", band_factor: float = 100.0,
+                max_hz: Optional[float] = None) -> BladeModesResult:
     """Modes of one blade clamped on the spinning hub, sorted by frequency.
 
     ``elements`` (default: the turbine's), ``rotor_speed`` [rad/s] (default: the turbine's).
@@ -44,6 +45,8 @@ def blade_modes(turbine: Turbine, elements: Optional[int] = None,
     ``count``: how many of the lowest modes to return (default: all for dense,
     DEFAULT_SPARSE_COUNT for sparse).  ``band_factor``: modes above this many times the
     element-level frequency bound (:func:`frequency_bound`) are discarded as numerical.
+    ``max_hz``: keep only the modes at or below this frequency [Hz] (of the lowest
+    ``count``).
     """
     if method not in ("auto", "dense", "sparse"):
         raise ValueError(f"method: {method!r} is not allowed; use 'auto', 'dense' or 'sparse'")
@@ -51,11 +54,14 @@ def blade_modes(turbine: Turbine, elements: Optional[int] = None,
         if isinstance(count, bool) or int(count) != count or count < 1:
             raise ValueError(f"count: {count!r} is not allowed; need an integer >= 1")
         count = int(count)
+    if max_hz is not None and not (isinstance(max_hz, (int, float)) and max_hz > 0
+                                   and np.isfinite(max_hz)):
+        raise ValueError(f"max_hz: {max_hz!r} is not allowed; need a frequency > 0 [Hz]")
     with blas_threads():
-        return _blade_modes(turbine, elements, rotor_speed, count, method, band_factor)
+        return _blade_modes(turbine, elements, rotor_speed, count, method, band_factor, max_hz)
 
 
-def _blade_modes(turbine, elements, rotor_speed, count, method, band_factor):
+def _blade_modes(turbine, elements, rotor_speed, count, method, band_factor, max_hz=None):
     model = SpinningBlade(turbine, elements, rotor_speed)
     y0 = model.steady_state()
     Jy, Jd = model.jacobians(np.zeros(model.n), y0)
@@ -71,6 +77,8 @@ def _blade_modes(turbine, elements, rotor_speed, count, method, band_factor):
     order = np.lexsort((lam.real, np.abs(lam.imag)))
     if count is not None:
         order = order[:count]
+    if max_hz is not None:
+        order = order[np.abs(lam[order].imag) / (2 * np.pi) <= max_hz]
     modes = []
     counts = {}
     for j in order:
@@ -86,7 +94,7 @@ def _blade_modes(turbine, elements, rotor_speed, count, method, band_factor):
                           eigenvalue=complex(lam[j]), shape=mode_shape(model.beam, x)))
     settings = {"turbine": turbine.name, "elements": model.beam.N, "rotor_speed": om,
                 "hub_radius": float(turbine.hub.radius), "method": method,
-                "count": count, "unknowns": model.n,
+                "count": count, "max_hz": max_hz, "unknowns": model.n,
                 "in_vacuum": turbine.aerodynamics is not None}
     return BladeModesResult(rotor_speed=om, elements=model.beam.N, modes=modes,
                             root_force=y0[0:3].copy(), settings=settings)

@@ -16,8 +16,15 @@ from .status import ProgressLine
 def cmd_blade_modes(args) -> int:
     from ..analyses.blade_modes import blade_modes
     turbine = load(args.turbine)
+    count = args.count
+    if args.accuracy is not None and count is None and args.max_hz is None:
+        count = ACCURACY_COUNT
+    scope = " and ".join(([f"the {count} lowest modes"] if count else [])
+                         + ([f"the modes below {args.max_hz:g} Hz"] if args.max_hz else [])) \
+        or "every mode"
     result = with_accuracy(args, turbine, lambda t, n: blade_modes(
-        t, elements=n, rotor_speed=args.rotor_speed, count=args.count, method=args.method))
+        t, elements=n, rotor_speed=args.rotor_speed, count=count, method=args.method,
+        max_hz=args.max_hz), scope=scope)
     result.settings["turbine_file"] = args.turbine
     if args.plot:
         result.plot(args.plot)
@@ -30,11 +37,20 @@ def cmd_blade_modes(args) -> int:
     return 0
 
 
+#: Modes blade-modes reports (and converges) with --accuracy and neither --count nor --max-hz.
+ACCURACY_COUNT = 10
+
+
 @cmd_blade_modes.arguments
 def _blade_modes_args(p):
     model_args(p)
     p.add_argument("--count", type=positive_int, default=None,
-                   help="number of lowest modes (default: all, or 30 for large models)")
+                   help="number of lowest modes (default: all, or 30 for large models; "
+                        f"{ACCURACY_COUNT} with --accuracy)")
+    p.add_argument("--max-hz", type=finite_float("--max-hz", minimum=1e-9, unit="Hz"),
+                   default=None, metavar="F",
+                   help="only the modes at or below F Hz (with --accuracy: the modes it "
+                        "applies to)")
     p.add_argument("--method", choices=("auto", "dense", "sparse"), default="auto",
                    help="eigen-solver: dense QZ with deflation, sparse shift-invert, or auto")
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")

@@ -139,8 +139,9 @@ def model_args(p):
                    help="rotor speed [rad/s] (default: the turbine file's)")
     p.add_argument("--accuracy", type=accuracy_type, default=None, metavar="TOL",
                    help="choose the mesh: raise the elements per blade (from --elements or "
-                        "the file's) until every frequency's estimated discretization error "
-                        "(Richardson, second order) is below TOL, e.g. 1e-3")
+                        "the file's) until the estimated discretization error (Richardson) "
+                        "of every mode printed is below TOL, e.g. 1e-3; the mode that "
+                        "limits it is named")
     p.add_argument("--error-estimate", action="store_true",
                    help="also run half the elements and report each frequency's estimated "
                         "discretization error")
@@ -161,14 +162,15 @@ def refined_runner(turbine, n0: int, analysis):
     return run
 
 
-def with_accuracy(args, turbine, analysis, progress=None):
+def with_accuracy(args, turbine, analysis, progress=None, scope="the modes printed"):
     """The analysis at the requested mesh, with error estimates (--error-estimate) or at the
-    mesh --accuracy chooses (hawt_core.analyses.accuracy)."""
+    mesh --accuracy chooses (hawt_core.analyses.accuracy) for the modes the analysis
+    reports (``scope`` names them in messages)."""
     from ..analyses.accuracy import converge, with_error_estimates
     n0 = int(args.elements or turbine.blade.elements)
     run = refined_runner(turbine, n0, analysis)
     if args.accuracy is not None:
-        return converge(run, n0, args.accuracy, progress)
+        return converge(run, n0, args.accuracy, progress, scope=scope)
     if args.error_estimate:
         return with_error_estimates(run, n0)
     return run(n0)
