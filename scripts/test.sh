@@ -36,9 +36,18 @@ if [ -n "${LD_LIBRARY_PATH:-}" ]; then
   export LD_LIBRARY_PATH
 fi
 
-echo "test.sh: ROS_DOMAIN_ID=$ROS_DOMAIN_ID ROS_LOG_DIR=$ROS_LOG_DIR" >&2
+# Parallel test processes (pytest-xdist), one per core by default (HAWT_TEST_WORKERS=N to
+# choose, 0 for one process; an explicit -n/--numprocesses/-p no:xdist in the arguments wins).
+# Whole files go to one worker (--dist loadfile): module fixtures are computed once, and the
+# ROS tests of a file run one after another. Each worker draws ROS domains from its own share
+# (tests/ros_support.py).
+workers=(-n "${HAWT_TEST_WORKERS:-auto}" --dist loadfile)
+for a in "$@"; do
+  case "$a" in -n|-n*|--numprocesses*|no:xdist) workers=() ;; esac
+done
+echo "test.sh: ROS_DOMAIN_ID=$ROS_DOMAIN_ID ROS_LOG_DIR=$ROS_LOG_DIR workers=${HAWT_TEST_WORKERS:-auto}" >&2
 cd "$root"
 set +e
-"$venv/bin/python" -m pytest "$@"
+"$venv/bin/python" -m pytest "${workers[@]}" "$@"
 rc=$?
 exit $rc

@@ -27,9 +27,14 @@ def require_ros(import_error: Optional[str], exe: Optional[Path] = None) -> None
 
 
 def domain_id() -> int:
-    """A ROS domain of this test alone: from the pid and a counter shared by every ROS test
-    file of this pytest process, in 1..101."""
-    return (os.getpid() * 7 + next(_domains) * 13) % 101 + 1
+    """A ROS domain of this test alone, in 1..101: from the pid and a counter shared by every
+    ROS test file of this pytest process; under pytest-xdist each worker draws from its own
+    share of the range (gw0 from the first 101 / workers, ...), so two workers never share
+    a domain."""
+    workers = max(1, int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1")))
+    worker = int(os.environ.get("PYTEST_XDIST_WORKER", "gw0")[2:] or 0) % workers
+    share = 101 // workers
+    return worker * share + (os.getpid() * 7 + next(_domains) * 13) % share + 1
 
 
 def child_env(domain: int, tmp_path: Path, **extra: str) -> dict:

@@ -34,7 +34,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ..numerics.pencil import finite_modes, refine_eigenpairs
+from ..numerics.pencil import arpack_start, finite_modes, refine_eigenpairs
 from ..numerics.threads import thread_map
 from .floquet import FourierCoefficients, LinearPeriodicDAE, dominant_harmonic
 from .hill_reduced import CORRECTION_TRUST, ReductionFailed, reduced_converged_modes
@@ -170,11 +170,10 @@ class _ShiftInvert:
         N = self.N
         ncv = min(N - 1, max(2 * k + 1, 40))
         for attempt in range(3):
-            # ARPACK starts from a random vector; LAPACK's Schur reordering inside it can
-            # fail for some starts (widely spread eigenvalues): retry from fixed ones
-            v0 = None if attempt == 0 else np.random.default_rng(attempt).standard_normal(N)
-            if v0 is not None and self.op.dtype == complex:
-                v0 = v0 + 1j * np.random.default_rng(10 + attempt).standard_normal(N)
+            # fixed start vectors (reproducible whatever ran before); LAPACK's Schur
+            # reordering inside ARPACK can fail for some starts (widely spread
+            # eigenvalues): retry from other ones
+            v0 = arpack_start(N, self.op.dtype == complex, seed=attempt)
             try:
                 mu, X = spla.eigs(self.op, k=k, which="LM", ncv=min(N - 1, ncv + 10 * attempt),
                                   tol=1e-13, v0=v0)

@@ -32,6 +32,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from ..numerics.pencil import arpack_start
 from .floquet import dominant_harmonic
 
 #: The modal basis holds the averaged pencil's eigenvectors with |lambda| <= BASIS_MARGIN x the
@@ -93,7 +94,8 @@ def _averaged_modes(A0, E0, radius: float, stats: dict):
     def eigs(op, k):
         k = min(k, n - 2)
         while True:
-            mu, V = spla.eigs(op, k=k, which="LM", tol=1e-13, ncv=min(n - 1, 2 * k + 20))
+            mu, V = spla.eigs(op, k=k, which="LM", tol=1e-13, ncv=min(n - 1, 2 * k + 20),
+                              v0=arpack_start(n))
             lam = sigma + 1.0 / mu
             if np.abs(lam - sigma).max() > 1.1 * radius + abs(sigma) or k >= n - 2:
                 return lam, V, k
