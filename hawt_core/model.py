@@ -131,6 +131,12 @@ class Beam:
     TipMass: a tip brake, a tip weight); ``tip_inertia`` (J1, J2, J3) [kg m^2]: its
     principal inertias about the tip section's axes (b1 spanwise, b2, b3), about its
     centre of mass at the tip point.
+
+    ``order``: the polynomial degree of the elements' fields.  1 is the paper's mixed
+    element (fem/beam.py: linear u, theta, V, Omega, constant F, M, element-averaged
+    properties; second order in the element count); 2 and more the p-version of the same
+    formulation (fem/spectral.py: degree-p fields, the properties integrated exactly
+    between the file's stations; its error falls like h^(2p) on smooth modes).
     """
 
     length: float
@@ -138,6 +144,7 @@ class Beam:
     elements: int = 4
     tip_mass: float = 0.0
     tip_inertia: tuple = (0.0, 0.0, 0.0)
+    order: int = 1
 
 
 @dataclass(frozen=True)

@@ -35,7 +35,7 @@ import numpy as np
 from ..aero.bem import momentum_thrust, prandtl_loss, quasi_steady_inductions
 from ..aero.inflow import oye_residuals, oye_steady, oye_time_constants
 from ..aero.strip import BladeStrips, inflow_sine
-from ..fem.beam_jacobian import PointwiseBeamJacobian
+from ..fem.discretization import pointwise_jacobian
 from ..model import Turbine
 from ..numerics.newton import newton
 from ..fem.beam import BLOCK_SIZE, ROOT_F, ROOT_M, U_
@@ -113,7 +113,7 @@ class AeroelasticBlade:
                                             np.full(self.n_ind * N * G, inflow == "oye")])
         self.rotor_radius = float(e + L)
         self.set_inflow_time_constant(0.3)
-        self._pointwise = PointwiseBeamJacobian(self.beam, self.n_ind)
+        self._pointwise = pointwise_jacobian(self.beam, self.n_ind)
 
     # ------------------------------------------------------------------ residual
     def set_inflow_time_constant(self, mean_induction: float) -> None:

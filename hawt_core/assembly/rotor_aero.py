@@ -152,7 +152,7 @@ class RotorAerodynamics:
         self.strips = BladeStrips(aero, xg / L, beam.props.element_frames(), rho)
         self.blade_state = None
         if inductions is None:
-            blade = AeroelasticBlade(turbine, self.normal_speed, elements=beam.N,
+            blade = AeroelasticBlade(turbine, self.normal_speed, elements=beam.elements,
                                      rotor_speed=self.omega, rho=rho)
             y = blade.steady_state()
             inductions = blade.inductions(y)

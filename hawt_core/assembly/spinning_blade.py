@@ -8,9 +8,7 @@ from typing import Optional
 
 import numpy as np
 
-from ..fem.beam import BeamElements
-from ..fem.beam_jacobian import PointwiseBeamJacobian
-from ..fem.sections import mesh_beam
+from ..fem.discretization import beam_elements, pointwise_jacobian
 from ..model import Turbine
 from ..numerics.checks import check_elements, check_rotor_speed
 from ..numerics.newton import newton
@@ -36,7 +34,7 @@ class SpinningBlade:
         self.rotor_speed = check_rotor_speed(turbine.rotor.speed if rotor_speed is None
                                              else rotor_speed)
         n_el = check_elements(turbine.blade.elements if elements is None else elements)
-        self.beam = BeamElements(mesh_beam(turbine.blade, n_el, pitch=turbine.rotor.pitch))
+        self.beam = beam_elements(turbine.blade, n_el, pitch=turbine.rotor.pitch)
         self.n = self.beam.n
         clamped = replace(turbine, rotor=replace(turbine.rotor, speed=self.rotor_speed),
                           hub=replace(turbine.hub, teeter=False, counterweight_mass=0.0),
@@ -44,7 +42,7 @@ class SpinningBlade:
                           gravity=replace(turbine.gravity, enabled=False), drivetrain=None)
         v, w = RigidSystem(clamped).root_motion(np.zeros(0), np.zeros(0), 0.0)
         self.v, self.w = np.real(v[0]).astype(float), np.real(w[0]).astype(float)
-        self._pointwise = PointwiseBeamJacobian(self.beam)
+        self._pointwise = pointwise_jacobian(self.beam)
         self.differential = self.beam.differential
 
     def residual(self, ydot, y, t=0.0):

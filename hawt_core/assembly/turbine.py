@@ -25,9 +25,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..aero.wind import Wind
-from ..fem.beam import BeamElements
-from ..fem.beam_jacobian import PointwiseBeamJacobian
-from ..fem.sections import mesh_beam
+from ..fem.discretization import beam_elements, pointwise_jacobian
 from ..model import Turbine
 from ..numerics.jacobian import (STEP, ColouredJacobian, beam_station_pattern,
                                  block_tridiagonal_pattern)
@@ -79,11 +77,11 @@ class TurbineModel:
         self.rotor_speed = float(turbine.rotor.speed)
         self.period = 2 * np.pi / self.rotor_speed if self.rotor_speed > 0 else np.inf
         self.rigid = RigidSystem(turbine)
-        self.beam = BeamElements(mesh_beam(turbine.blade, pitch=turbine.rotor.pitch))
+        self.beam = beam_elements(turbine.blade, pitch=turbine.rotor.pitch)
         self.n_blades = int(turbine.rotor.blades)
         self.nq, self.nu = self.rigid.n_q, self.rigid.n_u
         #: the flexible tower's beam (None: rigid tower)
-        self.tower = BeamElements(mesh_beam(turbine.tower)) if turbine.tower is not None else None
+        self.tower = beam_elements(turbine.tower) if turbine.tower is not None else None
         #: the blades' aerodynamics (None: in a vacuum)
         self.wind, self.rho = wind, float(rho)
         self.aero = (RotorAerodynamics(turbine, wind, self.rotor_speed, self.beam, rho,
@@ -127,9 +125,9 @@ class TurbineModel:
         #: (fem/beam_jacobian.py); False: by the colours of their patterns (tests and bench
         #: compare the two)
         self.pointwise_jacobians = True
-        self._beam_pointwise = PointwiseBeamJacobian(
+        self._beam_pointwise = pointwise_jacobian(
             self.beam, len(self.aero.state_names) if self.n_aero else 0)
-        self._tower_pointwise = (PointwiseBeamJacobian(self.tower)
+        self._tower_pointwise = (pointwise_jacobian(self.tower)
                                  if self.tower is not None else None)
         #: dR/dydot (rows, cols, values) of the blocks whose rows are affine in the rates
         #: with constant coefficients (_block_jacobians), computed on first use:
@@ -233,7 +231,7 @@ class TurbineModel:
         """Sparsity of one blade block's rows w.r.t. its unknowns: the beam's blocks and the
         aerodynamic states of each Gauss point."""
         k = len(self.aero.state_names) if self.n_aero else 0
-        return beam_station_pattern(self.beam.pattern_blocks(), self.beam.xg.shape[1], k)
+        return beam_station_pattern(self.beam.pattern_blocks(), self.beam.station_points(), k)
 
     def _blade_residual(self, ydb, yb, v, w, g, air, out=None, capture=None):
         """Blade rows (K, blade_size) of K blades at root motions v, w (K, 3), gravity g

@@ -22,8 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..aero.unsteady import JONES, IndicialLag, thin_airfoil_loads
-from ..fem.beam import BeamElements
-from ..fem.sections import mesh_beam
+from ..fem.discretization import beam_elements
 from ..model import Beam, Wing
 from ..numerics.rotations import cross
 
@@ -44,7 +43,7 @@ class WingModel:
         if not -1.0 <= axis <= 1.0:
             raise ValueError(f"axis: {axis!r} is not allowed; need a value from -1 (leading "
                              "edge) to 1 (trailing edge) [semi-chords aft of mid-chord]")
-        self.beam = BeamElements(mesh_beam(beam, elements), gauss)
+        self.beam = beam_elements(beam, elements, gauss=gauss)
         self.semichord = 0.5 * float(chord)
         self.axis = float(axis)
         self.rho = float(rho)

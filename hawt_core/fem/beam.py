@@ -361,6 +361,20 @@ class BeamElements:
         """Block sizes of the unknowns (root block, then N element blocks)."""
         return [ROOT_SIZE] + [BLOCK_SIZE] * self.N
 
+    @property
+    def elements(self) -> int:
+        """Elements of the mesh (N: one cell each)."""
+        return self.N
+
+    @property
+    def order(self) -> int:
+        """Polynomial degree of the fields (model.Beam.order): 1."""
+        return 1
+
+    def station_points(self) -> int:
+        """Gauss points per pattern block (numerics.jacobian.beam_station_pattern)."""
+        return len(self.eta)
+
     def rigid_body_state(self, v, w):
         """Unknowns (n,) of one undeformed beam in rigid motion (v, w constant, real), with the
         section forces left at zero: a starting guess for steady-state Newton iterations."""

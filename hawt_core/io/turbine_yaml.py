@@ -30,7 +30,7 @@ from typing import Any, Optional
 import numpy as np
 import yaml
 
-from ..numerics.limits import (MAX_BLADES, MAX_ELEMENTS, MAX_FILE_BYTES, MAX_POLAR_ANGLES,
+from ..numerics.limits import (MAX_BLADES, MAX_ELEMENTS, MAX_ORDER, MAX_FILE_BYTES, MAX_POLAR_ANGLES,
                                MAX_POLARS, MAX_ROTOR_SPEED, MAX_SCALAR_CHARS, MAX_YAML_DEPTH,
                                MAX_YAML_VALUES)
 from ..model import (GENERATOR_MODES, PITT_PETERS_SKEW, Aerodynamics, Beam, Drivetrain,
@@ -200,9 +200,10 @@ _NACELLE = {"yaw_inertia": True, "yaw_stiffness": False, "yaw_damping": False,
             "yaw_to_teeter": True, "shaft_tilt": False, "yaw_free": True, "mass": False,
             "cg_offset": False, "inertia_pitch": False, "inertia_roll": False,
             "shaft_height": False, "yaw_bearing_mass": False}
-_TOWER = {"length": True, "elements": True, "sections": True, "rigid": False}
+_TOWER = {"length": True, "elements": True, "sections": True, "rigid": False,
+          "order": False}
 _BEAM = {"length": True, "elements": True, "sections": True, "tip_mass": False,
-         "tip_inertia": False}
+         "tip_inertia": False, "order": False}
 _GRAVITY = {"enabled": True, "g": False}
 #: Per-station scalar properties: name -> value rule (a key of _RULES).
 SCALAR_PROPS = {
@@ -308,6 +309,12 @@ def _beam(c: _Checker, value: Any, path: str, spec: dict) -> Optional[Beam]:
         return None
     length = c.number(d, "length", path, "> 0")
     elements = c.integer(d, "elements", path, 1, MAX_ELEMENTS, "MAX_ELEMENTS")
+    order = c.integer(d, "order", path, 1, MAX_ORDER, "MAX_ORDER") if "order" in d else 1
+    if elements is not None and order is not None and elements * order > MAX_ELEMENTS:
+        c.error(f"{path}.order", f"elements x order must be at most {MAX_ELEMENTS} "
+                f"(MAX_ELEMENTS: the cells of the mesh); {elements} x {order} is "
+                f"{elements * order}", order)
+        order = None
     blade = spec is _BEAM                  # prebend, sweep and a tip body: blades only
     sections = (_section_table(c, d["sections"], f"{path}.sections", curved_line=blade)
                 if "sections" in d else None)
@@ -320,9 +327,9 @@ def _beam(c: _Checker, value: Any, path: str, spec: dict) -> Optional[Beam]:
             c.error(f"{path}.tip_inertia", "every value must be >= 0 [kg m^2]",
                     d["tip_inertia"])
             tip["tip_inertia"] = None
-    if None in (length, elements, sections) or None in tip.values():
+    if None in (length, elements, sections, order) or None in tip.values():
         return None
-    return Beam(length=length, sections=sections, elements=elements, **tip)
+    return Beam(length=length, sections=sections, elements=elements, order=order, **tip)
 
 
 def _vector3(c: _Checker, d: Mapping, key: str, path: str,

@@ -11,7 +11,7 @@ polars of 200 angles; wind turbines turn below 10 rad/s).
 from __future__ import annotations
 
 __all__ = ["MAX_FILE_BYTES", "MAX_YAML_DEPTH", "MAX_YAML_VALUES", "MAX_SCALAR_CHARS",
-           "MAX_STATIONS", "MAX_ELEMENTS", "MAX_BLADES", "MAX_POLARS", "MAX_POLAR_ANGLES",
+           "MAX_STATIONS", "MAX_ELEMENTS", "MAX_ORDER", "MAX_BLADES", "MAX_POLARS", "MAX_POLAR_ANGLES",
            "MAX_ROTOR_SPEED", "MAX_STEP_DEG", "MAX_PERTURB_ANGLE", "MAX_PERTURB_RATE",
            "LIMITS"]
 
@@ -26,8 +26,11 @@ MAX_YAML_VALUES = 100_000
 MAX_SCALAR_CHARS = 4096
 #: Most spanwise stations of one table (sections, aerodynamic stations).
 MAX_STATIONS = 1000
-#: Most finite elements per blade or tower.
+#: Most finite elements per blade or tower (for the p-version, elements x order: its cells).
 MAX_ELEMENTS = 512
+#: Highest polynomial degree of the p-version beam elements (fem/spectral.py); past ~8 the
+#: cells' quadrature, not the degree, limits the accuracy.
+MAX_ORDER = 12
 #: Most blades of a rotor.
 MAX_BLADES = 64
 #: Most airfoil polars, and most angles of attack in one polar.
@@ -51,6 +54,7 @@ LIMITS = {
     "MAX_SCALAR_CHARS": (MAX_SCALAR_CHARS, "characters", "one YAML value"),
     "MAX_STATIONS": (MAX_STATIONS, "stations", "one spanwise table"),
     "MAX_ELEMENTS": (MAX_ELEMENTS, "elements", "finite elements per blade or tower"),
+    "MAX_ORDER": (MAX_ORDER, "degree", "polynomial degree of the beam elements"),
     "MAX_BLADES": (MAX_BLADES, "blades", "blades of a rotor"),
     "MAX_POLARS": (MAX_POLARS, "polars", "airfoil polars"),
     "MAX_POLAR_ANGLES": (MAX_POLAR_ANGLES, "angles", "angles of attack in one polar"),

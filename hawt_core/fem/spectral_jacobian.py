@@ -1,0 +1,140 @@
+"""dR/dy of p-version beams (fem/spectral.py) from complex steps of the Gauss-point
+integrands: fem/beam_jacobian.py's method on elements of p cells.
+
+Every nonlinear term of a SpectralBeamElements residual is pointwise at its Gauss points
+(the integrand there reads the fields interpolated there, the section loads F, M
+interpolated there and, in wind, that point's aerodynamic unknowns); the rows are linear in
+the integrands (weighted by phi_j or psi_k) plus constant entries (``-int phi_j' psi_k`` on
+the equilibrium rows, ``int psi_k phi_j'`` on the strain rows, the root loads).  The
+Lagrange bases are partitions of unity, so a complex step of a field at every node (of F, M
+at every coefficient) moves every Gauss point's value of it by the same step: the same 18 +
+k steps as fem/beam_jacobian.py give every Gauss point's derivatives, and each element's
+block follows by the chain rule through the bases and the weights.  At the clamped root the
+first element's Gauss points move by ``1 - phi_0(xi)`` under a u or theta step (node 0 is
+not an unknown): those derivatives are divided by it (exact).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .beam import BLOCK_SIZE, ROOT_SIZE
+from .beam_jacobian import PointwiseBeamJacobian, _FIELDS, _LOADS
+from .spectral import SpectralBeamElements
+
+
+class SpectralPointwiseJacobian(PointwiseBeamJacobian):
+    """dR/dy (and dR/dydot) of one SpectralBeamElements beam followed by ``states``
+    unknowns per Gauss point (layout of PointwiseBeamJacobian; use :meth:`entries` or
+    :meth:`matrix`)."""
+
+    def __init__(self, beam: SpectralBeamElements, states: int = 0):
+        self.beam = beam
+        Ne, p, Q, G = beam.elements, beam.order, beam.Q, beam.gauss
+        N = beam.N
+        self.N, self.G, self.k = N, G, int(states)
+        self.Ne, self.p, self.Q = Ne, p, Q
+        self.n_beam = beam.n
+        self.n = beam.n + self.k * N * G
+        D = self.directions = _FIELDS + _LOADS + self.k
+        blocks = ROOT_SIZE + BLOCK_SIZE * np.arange(N)
+        seeds = np.zeros((D, self.n))
+        for f in range(_FIELDS):
+            seeds[f, blocks + 6 + f] = 1.0
+            if f >= 6:
+                seeds[f, f] = 1.0
+        for m in range(_LOADS):
+            seeds[_FIELDS + m, blocks + m] = 1.0
+        for j in range(self.k):
+            seeds[_FIELDS + _LOADS + j, self.n_beam + j * N * G + np.arange(N * G)] = 1.0
+        self.seeds = seeds
+        #: the clamped root: how far a u, theta step moves element 0's Gauss points
+        self._root_scale = 1.0 - beam._Lq[:, 0]
+        nn, nf = 12 * (p + 1), 6 * p
+        L = self.local = nn + nf + self.k * Q
+        self._nn, self._nf = nn, nf
+
+        def node_idx(g, clamp):
+            if g == 0:
+                out = np.arange(12)
+                if clamp:
+                    out = out.copy()
+                    out[:6] = -1
+                return out
+            return ROOT_SIZE + BLOCK_SIZE * (g - 1) + 6 + np.arange(12)
+
+        rows = np.empty((Ne, L), int)
+        cols = np.empty((Ne, L), int)
+        for e in range(Ne):
+            nr = np.concatenate([node_idx(e * p + j, False) for j in range(p + 1)])
+            nc = np.concatenate([node_idx(e * p + j, True) for j in range(p + 1)])
+            fm = np.concatenate([ROOT_SIZE + BLOCK_SIZE * (e * p + k) + np.arange(6)
+                                 for k in range(p)])
+            st = (self.n_beam + np.arange(self.k)[:, None] * N * G + e * Q
+                  + np.arange(Q)[None, :]).ravel()
+            rows[e] = np.concatenate([nr, fm, st])
+            cols[e] = np.concatenate([nc, fm, st])
+        keep = np.broadcast_to(cols[:, None, :] >= 0, (Ne, L, L))
+        self._keep = keep.ravel()
+        self._rows = np.broadcast_to(rows[:, :, None], (Ne, L, L)).ravel()[self._keep]
+        self._cols = np.broadcast_to(cols[:, None, :], (Ne, L, L)).ravel()[self._keep]
+        const = np.zeros((Ne, L, L))
+        i6 = np.eye(6)
+        for j in range(p + 1):
+            for k in range(p):
+                const[:, 12 * j:12 * j + 6, nn + 6 * k:nn + 6 * k + 6] -= \
+                    beam._C[:, j, k, None, None] * i6
+                const[:, nn + 6 * k:nn + 6 * k + 6, 12 * j:12 * j + 6] += \
+                    beam._D[:, k, j, None, None] * i6
+        self._const = const
+        self._root = (np.arange(6), np.arange(6), -np.ones(6))
+
+    def values(self, capture: dict, state_rows, h: float, blocks: int, rates: bool = False):
+        """As PointwiseBeamJacobian.values, for the p-version's elements."""
+        beam = self.beam
+        Ne, p, Q, D, k, nb = self.Ne, self.p, self.Q, self.directions, self.k, blocks
+        nn, nf, L = self._nn, self._nf, self.local
+        A = capture["integrand"].imag.reshape(Ne, Q, D, nb, 18).transpose(0, 1, 3, 4, 2) / h
+        A[0, :, :, :, 0:6] /= self._root_scale[:, None, None, None]
+        WL, WP, Lq, Pq = beam._WL, beam._WP, beam._Lq, beam._Pq
+        V = np.zeros((Ne, nb, L, L))
+        Fc = slice(_FIELDS, _FIELDS + _LOADS)
+        An, As = A[..., 0:12, :], A[..., 12:18, :]
+        V[:, :, :nn, :nn] = np.einsum("ejq,qi,eqbrd->ebjrid", WL, Lq,
+                                      An[..., :_FIELDS]).reshape(Ne, nb, nn, nn)
+        V[:, :, :nn, nn:nn + nf] = np.einsum("ejq,qm,eqbrd->ebjrmd", WL, Pq,
+                                             An[..., Fc]).reshape(Ne, nb, nn, nf)
+        V[:, :, nn:nn + nf, :nn] = -np.einsum("ekq,qi,eqbrd->ebkrid", WP, Lq,
+                                              As[..., :_FIELDS]).reshape(Ne, nb, nf, nn)
+        V[:, :, nn:nn + nf, nn:nn + nf] = -np.einsum("ekq,qm,eqbrd->ebkrmd", WP, Pq,
+                                                     As[..., Fc]).reshape(Ne, nb, nf, nf)
+        if not rates:
+            V += self._const[:, None]
+        if capture.get("tip") is not None:
+            T = capture["tip"].imag.reshape(D, nb, 6)[:_FIELDS].transpose(1, 2, 0) / h
+            V[Ne - 1, :, 12 * p:12 * p + 6, 12 * p:12 * p + 12] += T
+        if k:
+            S = slice(nn + nf, L)
+            Ax = A[..., _FIELDS + _LOADS:]                              # (Ne, Q, nb, 18, k)
+            # structural rows w.r.t. each Gauss point's states (state-major columns)
+            V[:, :, :nn, S] = np.einsum("ejq,eqbrs->ebjrsq", WL, Ax[..., 0:12, :]).reshape(
+                Ne, nb, nn, k * Q)
+            V[:, :, nn:nn + nf, S] = -np.einsum("ekq,eqbrs->ebkrsq", WP,
+                                                Ax[..., 12:18, :]).reshape(Ne, nb, nf, k * Q)
+            # the state rows at each Gauss point w.r.t. its inputs
+            Bq = state_rows.imag.reshape(D, nb, k, Ne, Q).transpose(3, 4, 1, 2, 0) / h
+            Bq[0, :, :, :, 0:6] /= self._root_scale[:, None, None, None]  # (Ne, Q, nb, k, D)
+            V[:, :, S, :nn] = np.einsum("eqbsd,qi->ebsqid", Bq[..., :_FIELDS], Lq).reshape(
+                Ne, nb, k * Q, nn)
+            V[:, :, S, nn:nn + nf] = np.einsum("eqbsd,qm->ebsqmd", Bq[..., Fc], Pq).reshape(
+                Ne, nb, k * Q, nf)
+            own = Bq[..., _FIELDS + _LOADS:]                                # (Ne, Q, nb, k, k)
+            blk = np.zeros((Ne, nb, k, Q, k, Q))
+            idx = np.arange(Q)
+            blk[:, :, :, idx, :, idx] = own.transpose(1, 0, 2, 3, 4)
+            V[:, :, S, S] = blk.reshape(Ne, nb, k * Q, k * Q)
+        vals = V.transpose(1, 0, 2, 3).reshape(nb, -1)[:, self._keep]
+        if rates:
+            return self._rows, self._cols, vals
+        r0, c0, v0 = self._root
+        return (np.concatenate([self._rows, r0]), np.concatenate([self._cols, c0]),
+                np.concatenate([vals, np.broadcast_to(v0, (nb, 6))], axis=1))
