@@ -128,11 +128,23 @@ def property_moments(beam: Beam, s_nodes, eta, w, x_of_s, s_of_x):
     s_s = s_nodes[cell] + h[cell] * eta_s
     sec = sections_at(beam.sections, np.clip(x_of_s(s_s) / L, 0.0, 1.0))
     lg, _ = lagrange_basis(eta, eta_s)                                # (S, G)
+    s_g = s_nodes[:-1, None] + h[:, None] * np.asarray(eta)[None, :]
+    at_points = sections_at(beam.sections, np.clip(x_of_s(s_g.ravel()) / L, 0.0, 1.0))
     out = []
-    for M in (station_compliance(sec), station_mass(sec)):
+    for M, M_g in ((station_compliance(sec), station_compliance(at_points)),
+                   (station_mass(sec), station_mass(at_points))):
         acc = np.zeros((N, G, 6, 6))
         np.add.at(acc, cell, (w_s[:, None] * lg)[:, :, None, None] * M[:, None])
-        out.append(acc / (h[:, None] * w[None, :])[..., None, None])
+        acc /= (h[:, None] * w[None, :])[..., None, None]
+        # a cell across a steep change (a blade root) can get an indefinite moment at a
+        # point (the Lagrange weights change sign): a negative compliance or mass there
+        # makes spurious, even unstable, modes on coarse meshes; such a cell keeps the
+        # properties sampled at its points (positive; exact only for smooth properties)
+        sym = 0.5 * (acc + np.swapaxes(acc, -1, -2))
+        scale = np.abs(sym).max(axis=(-1, -2), keepdims=True)[..., 0] + 1e-300
+        bad = (np.linalg.eigvalsh(sym) < -1e-12 * scale).any(axis=(1, 2))
+        acc[bad] = M_g.reshape(N, G, 6, 6)[bad]
+        out.append(acc)
     return out
 
 

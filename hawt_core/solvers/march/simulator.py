@@ -164,8 +164,10 @@ class Simulator(StepSolver, SimulationOutputs):
         self._lu = None
         self._lu_h = None
         self._jac_fresh = False
+        # the coloured complex step serves models without structured Jacobians only
+        # (step_solver.py); colouring a large pattern costs seconds, so not otherwise
         self._colour = None
-        if hasattr(model, "sparsity"):
+        if hasattr(model, "sparsity") and not hasattr(model, "jacobians"):
             self._colour = ColouredJacobian(model.sparsity())
         self._di = np.flatnonzero(self.diff)
         self._ai = np.flatnonzero(self.alg)
