@@ -92,9 +92,10 @@ def _blade_modes(turbine, elements, rotor_speed, count, method, band_factor, max
                           frequency_hz=float(lam[j].imag / (2 * np.pi)),
                           damping_ratio=float(-lam[j].real / w) if w > 0 else 0.0,
                           eigenvalue=complex(lam[j]), shape=mode_shape(model.beam, x)))
-    settings = {"turbine": turbine.name, "elements": model.beam.N, "rotor_speed": om,
+    settings = {"turbine": turbine.name, "elements": model.beam.elements,
+                "order": model.beam.order, "rotor_speed": om,
                 "hub_radius": float(turbine.hub.radius), "method": method,
                 "count": count, "max_hz": max_hz, "unknowns": model.n,
                 "in_vacuum": turbine.aerodynamics is not None}
-    return BladeModesResult(rotor_speed=om, elements=model.beam.N, modes=modes,
+    return BladeModesResult(rotor_speed=om, elements=model.beam.elements, modes=modes,
                             root_force=y0[0:3].copy(), settings=settings)

@@ -76,7 +76,7 @@ def flutter(wing, speeds, elements=None, modes: int = 4, unsteady: bool = True,
                            xtol=1e-9 * speeds[i + 1]))
     return FlutterResult(case=wing.name, speeds=speeds, frequency=freq, damping_ratio=zeta,
                          flutter_speed=U_f, flutter_frequency=f_f, divergence_speed=U_d,
-                         settings={"elements": int(model.beam.N), "band_rad_s": float(band),
+                         settings={"elements": int(model.beam.elements), "band_rad_s": float(band),
                                    "aerodynamics": "strip theory, Theodorsen with "
                                    + (JONES.name if unsteady else "C = 1 (quasi-steady)"),
                                    "density": wing.density, "lift_slope": wing.lift_slope})

@@ -453,7 +453,8 @@ def _modal_analysis(turbine, elements, rotor_speed, steps, method, fast, harmoni
     else:
         modes.sort(key=lambda m: (m.frequency_per_rev, m.real_per_rev))
     number_modes(modes)
-    settings = {"turbine": turbine.name, "elements": model.beam.N, "rotor_speed": omega,
+    settings = {"turbine": turbine.name, "elements": model.beam.elements,
+                "order": model.beam.order, "rotor_speed": omega,
                 "in_vacuum": wind is None and turbine.aerodynamics is not None,
                 "method": "standstill" if standstill else method, "steps": steps,
                 "fast": bool(use_fast),

@@ -148,13 +148,16 @@ def model_args(p):
 
 
 def refined_runner(turbine, n0: int, analysis):
-    """``run(n)``: ``analysis(turbine', n)`` with a flexible tower's elements scaled like
-    the blades' (n / n0, at least its own count's share)."""
+    """``run(n, order=None)``: ``analysis(turbine', n)`` with a flexible tower's elements
+    scaled like the blades' (n / n0, at least its own count's share) and, given ``order``,
+    the blade's elements of that order."""
     from dataclasses import replace
     import math
 
-    def run(n):
+    def run(n, order=None):
         t = turbine
+        if order is not None:
+            t = replace(t, blade=replace(t.blade, order=int(order)))
         if t.tower is not None:
             t = replace(t, tower=replace(t.tower, elements=max(
                 1, int(math.ceil(t.tower.elements * n / n0)))))
@@ -168,11 +171,12 @@ def with_accuracy(args, turbine, analysis, progress=None, scope="the modes print
     reports (``scope`` names them in messages)."""
     from ..analyses.accuracy import converge, with_error_estimates
     n0 = int(args.elements or turbine.blade.elements)
+    order = int(getattr(turbine.blade, "order", 1))
     run = refined_runner(turbine, n0, analysis)
     if args.accuracy is not None:
-        return converge(run, n0, args.accuracy, progress, scope=scope)
+        return converge(run, n0, args.accuracy, progress, scope=scope, order=order)
     if args.error_estimate:
-        return with_error_estimates(run, n0)
+        return with_error_estimates(run, n0, order)
     return run(n0)
 
 

@@ -25,6 +25,12 @@ VACUUM_NOTE = ("in a vacuum: the turbine's aerodynamics (blade and airfoil polar
                "in the model but not used by this structural analysis (--wind U: in wind)")
 
 
+def _of_order(settings: dict) -> str:
+    """" of order p" for the p-version's elements (settings["order"] > 1), else ""."""
+    order = int(settings.get("order", 1) or 1)
+    return f" of order {order}" if order > 1 else ""
+
+
 @dataclass
 class Mode:
     """One Floquet mode.  ``frequency_per_rev`` (and the other unprefixed fields) are the
@@ -126,7 +132,8 @@ class ModalResult:
                 how += f", truncation change {s['hill_relative_change']:.1e}"
         kind = "Modes" if self.standstill else "Dominant frequencies"
         header = (f"{kind} of the turbine '{s['turbine']}' ({'' if self.standstill else 'Floquet, '}{how}), "
-                  f"{s['elements']} elements per blade, rotor speed {s['rotor_speed']:.4g} rad/s")
+                  f"{s['elements']} elements per blade{_of_order(s)}, rotor speed "
+                  f"{s['rotor_speed']:.4g} rad/s")
         if s.get("wind_speed") is not None:
             header += (f", in wind {s['wind_speed']:.4g} m/s (pitch {s['pitch_deg']:.3g} deg; "
                        f"{s['aerodynamics']})")
@@ -226,7 +233,8 @@ class BladeModesResult:
 
     def table(self) -> str:
         lines = [f"Blade modes, clamped on the hub at {self.rotor_speed:.4g} rad/s, "
-                 f"{self.elements} elements ({self.settings.get('method', '')})",
+                 f"{self.elements} elements{_of_order(self.settings)} "
+                 f"({self.settings.get('method', '')})",
                  f"{'mode':<16}{'per-rev':>12}{'Hz':>12}{'damping':>12}"
                  + (f"{'est. error':>12}" if self.estimated else "")]
         for m in self.modes:

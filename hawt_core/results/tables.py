@@ -45,6 +45,10 @@ def error_note(estimate: dict, elements: str = "elements") -> str:
     """The footer line saying where the estimated errors come from
     (``settings["error_estimate"]`` of hawt_core.analyses.accuracy)."""
     coarse, fine = estimate["elements"]
+    if estimate.get("orders"):
+        low, high = estimate["orders"]
+        return (f"estimated errors: order {high} - order {low} on {fine} {elements} (relative; "
+                "a bound on the largest error, conservative)")
     return (f"estimated errors: Richardson from {coarse} and {fine} {elements} (converged - "
             "reported, relative)")
 

@@ -110,7 +110,7 @@ class HawtNode(Pacing, StatePublisher, Recording, AnalysisServer, Overrides, Nod
         self.omega = float(self.model.rotor_speed)
         self.geometry = RotorGeometry(self.model.rigid)
         self.n_blades = int(self.model.n_blades)
-        self._analysis_elements = int(self.model.beam.N)
+        self._analysis_elements = int(self.model.beam.elements)
 
         # ---------------------------------------------------------------- interfaces
         self._sim_group = MutuallyExclusiveCallbackGroup()
@@ -160,7 +160,7 @@ class HawtNode(Pacing, StatePublisher, Recording, AnalysisServer, Overrides, Nod
         s = self.settings
         self._check_step_rate()
         self.get_logger().info(
-            f"turbine '{self.turbine.name}' ({self.turbine_path}), {self.model.beam.N} elements "
+            f"turbine '{self.turbine.name}' ({self.turbine_path}), {self.model.beam.elements} elements "
             f"per blade, {self.n_blades} blades, rotor speed {self.omega:.4g} rad/s; "
             f"simulation: {self.sim_source}, step {s.step_deg:g} deg = {self.dt * 1e3:.3f} ms; "
             f"publishing at {s.publish_rate:g} Hz, real_time_factor {s.real_time_factor:g}"
