@@ -62,7 +62,87 @@ def _cross_components(x, z, dtype):
     return out
 
 
-class BeamElements:
+def turn_stacked(thg, T, sgn, cross):
+    """The stacked vectors T (..., m, 3) turned by the rotation parameters ``thg`` (..., 3):
+    C^T (sgn +1) or C (sgn -1) per vector (Wiener-Milenkovic, docs/theory.md), with
+    ``cross(x, z, shape)`` the residual's cross product; returns (turned, thg[..., None, :])."""
+    th1 = thg[..., None, :]
+    thT = cross(th1[..., :, None], T[..., None, :], T.shape)
+    dots = dot(T, th1)[..., None]
+    ss = (0.25 * dot(thg, thg))[..., None, None]
+    return (((1 - ss) * T + sgn * thT + 0.5 * th1 * dots) / (1 + ss)), th1
+
+
+def q_stacked(th1, T2, cross):
+    """Q(theta) applied to the stacked vectors T2 (..., 2, 3) (``th1`` from turn_stacked)."""
+    thT2 = cross(th1[..., :, None], T2[..., None, :], T2.shape)
+    return T2 + 0.5 * thT2 + 0.25 * th1 * dot(T2, th1)[..., None]
+
+
+class CellLayout:
+    """What both discretizations share (this module's and fem/spectral.py's): the unknowns
+    of a root block and N cells of 18 ([F, M, u, theta, V, Omega], module docstring), and
+    the rigid tip body on the last node.  Needs ``N``, ``n``, ``props``, ``tip_mass``,
+    ``tip_inertia``."""
+
+    def _differential_mask(self) -> np.ndarray:
+        d = np.zeros(self.n, bool)
+        d[ROOT_V] = d[ROOT_OM] = True
+        blk = d[ROOT_SIZE:].reshape(self.N, BLOCK_SIZE)
+        blk[:, U_] = blk[:, TH_] = blk[:, V_] = blk[:, OM_] = True
+        return d
+
+    def split(self, y):
+        """Views of a (B, n) array: root (B,12) and element blocks (B,N,18)."""
+        return y[:, :ROOT_SIZE], y[:, ROOT_SIZE:].reshape(y.shape[0], self.N, BLOCK_SIZE)
+
+    def nodal(self, y):
+        """Nodal u, theta, V, Omega (B, N+1, 3) and element F, M (B, N, 3) of a (B, n) array."""
+        root, blk = self.split(y)
+        z = np.zeros_like(root[:, None, 0:3])
+        u = np.concatenate([z, blk[:, :, U_]], 1)
+        th = np.concatenate([z, blk[:, :, TH_]], 1)
+        V = np.concatenate([root[:, None, ROOT_V], blk[:, :, V_]], 1)
+        Om = np.concatenate([root[:, None, ROOT_OM], blk[:, :, OM_]], 1)
+        return u, th, V, Om, blk[:, :, F_], blk[:, :, M_]
+
+    def _tip_body_loads(self, yd, y, g):
+        """(B, 6) loads of the rigid tip body on the tip node, added to its equilibrium rows:
+        F = m (C g - Vdot - Omega x V), M = -(J Omegadot + Omega x J Omega), from the tip
+        node's theta, V, Omega and rates (turned-b components, as the rows)."""
+        o = ROOT_SIZE + BLOCK_SIZE * (self.N - 1)
+        th, V, Om = y[:, o + 9:o + 12], y[:, o + 12:o + 15], y[:, o + 15:o + 18]
+        Vd, Omd = yd[:, o + 12:o + 15], yd[:, o + 15:o + 18]
+        F = -self.tip_mass * (Vd + cross3(Om, V))
+        if g is not None:
+            F = F + self.tip_mass * rot_apply(th, g)
+        J = self.tip_inertia
+        M = -(Omd @ J.T + cross3(Om, Om @ J.T))
+        return np.concatenate([F, M], -1)
+
+    def dynamic_dimension(self) -> int:
+        """Dynamic states of one clamped beam: 2 per flexible section direction and element
+        (a direction with zero compliance is a constraint whose section load is a Lagrange
+        multiplier): 6N with rigid axial and shear directions, 12N with all six flexible."""
+        # nonzero compliance rows in the section frames (the turned R mixes a rigid
+        # direction with a flexible one)
+        flexible = np.any(self.props.compliance != 0, axis=2).sum()
+        return int(2 * flexible)
+
+    def rigid_body_state(self, v, w):
+        """Unknowns (n,) of one undeformed beam in rigid motion (v, w constant, real), with the
+        section forces left at zero: a starting guess for steady-state Newton iterations."""
+        y = np.zeros(self.n)
+        Vn = v[None, :] + np.cross(w[None, :], self.props.node_positions())
+        y[ROOT_V] = Vn[0]
+        y[ROOT_OM] = w
+        blk = y[ROOT_SIZE:].reshape(self.N, BLOCK_SIZE)
+        blk[:, V_] = Vn[1:]
+        blk[:, OM_] = w
+        return y
+
+
+class BeamElements(CellLayout):
     """The discretized beam operator for ``B`` identical beams sharing one mesh.
 
     ``props``: ElementProperties (mesh, 6x6 compliance and mass per element).
@@ -113,28 +193,6 @@ class BeamElements:
         self._has_tip_body = self.tip_mass != 0 or np.any(J != 0)
         self.differential = self._differential_mask()
         self._precompute()
-
-    # ------------------------------------------------------------------ layout helpers
-    def _differential_mask(self) -> np.ndarray:
-        d = np.zeros(self.n, bool)
-        d[ROOT_V] = d[ROOT_OM] = True
-        blk = d[ROOT_SIZE:].reshape(self.N, BLOCK_SIZE)
-        blk[:, U_] = blk[:, TH_] = blk[:, V_] = blk[:, OM_] = True
-        return d
-
-    def split(self, y):
-        """Views of a (B, n) array: root (B,12) and element blocks (B,N,18)."""
-        return y[:, :ROOT_SIZE], y[:, ROOT_SIZE:].reshape(y.shape[0], self.N, BLOCK_SIZE)
-
-    def nodal(self, y):
-        """Nodal u, theta, V, Omega (B, N+1, 3) and element F, M (B, N, 3) of a (B, n) array."""
-        root, blk = self.split(y)
-        z = np.zeros_like(root[:, None, 0:3])
-        u = np.concatenate([z, blk[:, :, U_]], 1)
-        th = np.concatenate([z, blk[:, :, TH_]], 1)
-        V = np.concatenate([root[:, None, ROOT_V], blk[:, :, V_]], 1)
-        Om = np.concatenate([root[:, None, ROOT_OM], blk[:, :, OM_]], 1)
-        return u, th, V, Om, blk[:, :, F_], blk[:, :, M_]
 
     # ------------------------------------------------------------------ residual
     def _precompute(self):
@@ -264,20 +322,15 @@ class BeamElements:
             T[..., 3, :] = g
         if airy:
             T[..., nT - m_wind:, :] = wind if several else wind[:, None, :]
-        th1 = thg[..., None, :]                                 # (N, G, B, 1, 3)
-        thT = cross(th1[..., :, None], T[..., None, :], T.shape)
-        dots = dot(T, th1)[..., None]                           # (N, G, B, nT, 1)
-        ss = (0.25 * dot(thg, thg))[..., None, None]            # (N, G, B, 1, 1)
         sgn = self._sgn4 if grav else self._sgn3
         if airy:
             sgn = np.concatenate([sgn, -np.ones((m_wind, 1))])
-        rT = (((1 - ss) * T + sgn * thT + 0.5 * th1 * dots) / (1 + ss))
+        rT, th1 = turn_stacked(thg, T, sgn, cross)              # th1 (N, G, B, 1, 3)
         # Q [Om - C w, kap]
         T2 = np.empty((N, G, B, 2, 3), dtype=dt)
         np.subtract(Omg, rT[..., 2, :], out=T2[..., 0, :])
         T2[..., 1, :] = kap[:, None]
-        thT2 = cross(th1[..., :, None], T2[..., None, :], T2.shape)
-        q = T2 + 0.5 * thT2 + 0.25 * th1 * dot(T2, th1)[..., None]
+        q = q_stacked(th1, T2, cross)
 
         # integrands at the Gauss points: [equilibrium f, m | kinematics u, theta | strain
         # displacement u, theta]
@@ -333,30 +386,7 @@ class BeamElements:
                 capture["tip"] = tip
         return out
 
-    def _tip_body_loads(self, yd, y, g):
-        """(B, 6) loads of the rigid tip body on the tip node, added to its equilibrium rows:
-        F = m (C g - Vdot - Omega x V), M = -(J Omegadot + Omega x J Omega), from the tip
-        node's theta, V, Omega and rates (turned-b components, as the rows)."""
-        o = ROOT_SIZE + BLOCK_SIZE * (self.N - 1)
-        th, V, Om = y[:, o + 9:o + 12], y[:, o + 12:o + 15], y[:, o + 15:o + 18]
-        Vd, Omd = yd[:, o + 12:o + 15], yd[:, o + 15:o + 18]
-        F = -self.tip_mass * (Vd + cross3(Om, V))
-        if g is not None:
-            F = F + self.tip_mass * rot_apply(th, g)
-        J = self.tip_inertia
-        M = -(Omd @ J.T + cross3(Om, Om @ J.T))
-        return np.concatenate([F, M], -1)
-
     # ------------------------------------------------------------------ helpers
-    def dynamic_dimension(self) -> int:
-        """Dynamic states of one clamped beam: 2 per flexible section direction and element
-        (a direction with zero compliance is a constraint whose section load is a Lagrange
-        multiplier): 6N with rigid axial and shear directions, 12N with all six flexible."""
-        # nonzero compliance rows in the section frames (the turned R mixes a rigid
-        # direction with a flexible one)
-        flexible = np.any(self.props.compliance != 0, axis=2).sum()
-        return int(2 * flexible)
-
     def pattern_blocks(self):
         """Block sizes of the unknowns (root block, then N element blocks)."""
         return [ROOT_SIZE] + [BLOCK_SIZE] * self.N
@@ -374,15 +404,3 @@ class BeamElements:
     def station_points(self) -> int:
         """Gauss points per pattern block (numerics.jacobian.beam_station_pattern)."""
         return len(self.eta)
-
-    def rigid_body_state(self, v, w):
-        """Unknowns (n,) of one undeformed beam in rigid motion (v, w constant, real), with the
-        section forces left at zero: a starting guess for steady-state Newton iterations."""
-        y = np.zeros(self.n)
-        Vn = v[None, :] + np.cross(w[None, :], self.props.node_positions())
-        y[ROOT_V] = Vn[0]
-        y[ROOT_OM] = w
-        blk = y[ROOT_SIZE:].reshape(self.N, BLOCK_SIZE)
-        blk[:, V_] = Vn[1:]
-        blk[:, OM_] = w
-        return y

@@ -33,6 +33,24 @@ _FIELDS, _LOADS = 12, 6
 _ROW_GROUPS = ((0, (0, 12), (0, 12)), (1, (12, 24), (0, 12)), (2, (24, 30), (12, 18)))
 
 
+def field_seeds(n: int, n_beam: int, N: int, G: int, k: int) -> np.ndarray:
+    """(18 + k, n) complex-step seeds of the Gauss-point Jacobians: field f of every node
+    (the root's V, Omega too: its u, theta are clamped), the section loads of every cell,
+    and state j at every Gauss point (layout of BeamElements / SpectralBeamElements with
+    N cells of G points and k states per point after the n_beam beam unknowns)."""
+    blocks = ROOT_SIZE + BLOCK_SIZE * np.arange(N)
+    seeds = np.zeros((_FIELDS + _LOADS + k, n))
+    for f in range(_FIELDS):
+        seeds[f, blocks + 6 + f] = 1.0
+        if f >= 6:                      # the root's V, Omega are unknowns (u, theta: 0)
+            seeds[f, f] = 1.0
+    for m in range(_LOADS):
+        seeds[_FIELDS + m, blocks + m] = 1.0
+    for j in range(k):
+        seeds[_FIELDS + _LOADS + j, n_beam + j * N * G + np.arange(N * G)] = 1.0
+    return seeds
+
+
 class PointwiseBeamJacobian:
     """dR/dy of ``beam``'s rows and unknowns, followed by ``states`` unknowns per Gauss point
     laid out state-major (state j of Gauss point g of element e at ``n_beam + (j N + e) G +
@@ -50,18 +68,8 @@ class PointwiseBeamJacobian:
         self.N, self.G, self.k = N, G, int(states)
         self.n_beam = beam.n
         self.n = beam.n + self.k * N * G
-        D = self.directions = _FIELDS + _LOADS + self.k
-        blocks = ROOT_SIZE + BLOCK_SIZE * np.arange(N)
-        seeds = np.zeros((D, self.n))
-        for f in range(_FIELDS):
-            seeds[f, blocks + 6 + f] = 1.0
-            if f >= 6:                      # the root's V, Omega are unknowns (u, theta: 0)
-                seeds[f, f] = 1.0
-        for m in range(_LOADS):
-            seeds[_FIELDS + m, blocks + m] = 1.0
-        for j in range(self.k):
-            seeds[_FIELDS + _LOADS + j, self.n_beam + j * N * G + np.arange(N * G)] = 1.0
-        self.seeds = seeds
+        self.directions = _FIELDS + _LOADS + self.k
+        self.seeds = field_seeds(self.n, self.n_beam, N, G, self.k)
         eta = beam.eta
         #: (G, 3) column weights: left node, right node, element constant
         self._phi = np.stack([1 - eta, eta, np.ones(G)], -1)

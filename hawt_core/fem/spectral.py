@@ -44,8 +44,9 @@ import numpy as np
 
 from ..model import Beam
 from ..numerics.limits import MAX_ORDER
-from ..numerics.rotations import LEVI_CIVITA_9, cross as cross3, dot, rot1, rot_apply, turn_e1_to
-from .beam import BLOCK_SIZE, F_, M_, OM_, ROOT_SIZE, TH_, U_, V_, _cross_components
+from ..numerics.rotations import LEVI_CIVITA_9, rot1, turn_e1_to
+from .beam import (BLOCK_SIZE, ROOT_SIZE, CellLayout, _cross_components, q_stacked,
+                   turn_stacked)
 from .sections import (ElementProperties, reference_line, sections_at, station_compliance,
                        station_mass)
 
@@ -148,7 +149,7 @@ def property_moments(beam: Beam, s_nodes, eta, w, x_of_s, s_of_x):
     return out
 
 
-class SpectralBeamElements:
+class SpectralBeamElements(CellLayout):
     """The discretized beam operator of order ``order`` (p) for ``B`` identical beams sharing
     one mesh of ``elements`` elements on ``beam`` (model.Beam), turned by ``pitch`` [rad]
     about b1 (fem/sections.py mesh_beam).  The interface is BeamElements' (residual, nodal,
@@ -263,13 +264,6 @@ class SpectralBeamElements:
         self._index()
 
     # ------------------------------------------------------------------ layout
-    def _differential_mask(self) -> np.ndarray:
-        d = np.zeros(self.n, bool)
-        d[6:12] = True
-        blk = d[ROOT_SIZE:].reshape(self.N, BLOCK_SIZE)
-        blk[:, U_] = blk[:, TH_] = blk[:, V_] = blk[:, OM_] = True
-        return d
-
     def _index(self):
         """Gather indices: every element's p + 1 nodes' [u, th, V, Om, rates] (24) in the
         concatenation [y | yd | 0] (2n + 1), and its p load coefficients (6) in y."""
@@ -288,20 +282,6 @@ class SpectralBeamElements:
         self._fm_idx = (ROOT_SIZE + BLOCK_SIZE * cells[..., None]
                         + np.arange(6)[None, None, :])                    # (Ne, p, 6)
 
-    def split(self, y):
-        """Views of a (B, n) array: root (B, 12) and cell blocks (B, N, 18)."""
-        return y[:, :ROOT_SIZE], y[:, ROOT_SIZE:].reshape(y.shape[0], self.N, BLOCK_SIZE)
-
-    def nodal(self, y):
-        """Nodal u, theta, V, Omega (B, N+1, 3) and the load coefficients F, M (B, N, 3)."""
-        root, blk = self.split(y)
-        z = np.zeros_like(root[:, None, 0:3])
-        u = np.concatenate([z, blk[:, :, U_]], 1)
-        th = np.concatenate([z, blk[:, :, TH_]], 1)
-        V = np.concatenate([root[:, None, 6:9], blk[:, :, V_]], 1)
-        Om = np.concatenate([root[:, None, 9:12], blk[:, :, OM_]], 1)
-        return u, th, V, Om, blk[:, :, F_], blk[:, :, M_]
-
     def pattern_blocks(self):
         """Block sizes for the element-level block-tridiagonal pattern: the root block, then
         one block of p cells per element (an element couples all its cells and the node it
@@ -311,22 +291,6 @@ class SpectralBeamElements:
     def station_points(self) -> int:
         """Gauss points per pattern block (numerics.jacobian.beam_station_pattern)."""
         return self.Q
-
-    def dynamic_dimension(self) -> int:
-        flexible = np.any(self.props.compliance != 0, axis=2).sum()
-        return int(2 * flexible)
-
-    def rigid_body_state(self, v, w):
-        """Unknowns (n,) of one undeformed beam in rigid motion (v, w constant), section
-        loads zero."""
-        y = np.zeros(self.n)
-        Vn = v[None, :] + np.cross(w[None, :], self.props.node_positions())
-        y[6:9] = Vn[0]
-        y[9:12] = w
-        blk = y[ROOT_SIZE:].reshape(self.N, BLOCK_SIZE)
-        blk[:, V_] = Vn[1:]
-        blk[:, OM_] = w
-        return y
 
     # ------------------------------------------------------------------ residual
     def residual(self, yd, y, v, w, g=None, tip_force=None, tip_moment=None, wind=None,
@@ -382,17 +346,12 @@ class SpectralBeamElements:
             T[..., 3, :] = g
         if airy:
             T[..., nT - m_wind:, :] = wind if several else wind[:, None, :]
-        th1 = thg[..., None, :]
-        thT = cross(th1[..., :, None], T[..., None, :], T.shape)
-        dots = dot(T, th1)[..., None]
-        ss = (0.25 * dot(thg, thg))[..., None, None]
         sgn = np.array([1.0, 1.0, -1.0] + [-1.0] * grav + [-1.0] * m_wind)[:, None]
-        rT = (((1 - ss) * T + sgn * thT + 0.5 * th1 * dots) / (1 + ss))
+        rT, th1 = turn_stacked(thg, T, sgn, cross)
         T2 = np.empty((Ne, Q, B, 2, 3), dtype=dt)
         np.subtract(Omg, rT[..., 2, :], out=T2[..., 0, :])
         T2[..., 1, :] = kap
-        thT2 = cross(th1[..., :, None], T2[..., None, :], T2.shape)
-        q = T2 + 0.5 * thT2 + 0.25 * th1 * dot(T2, th1)[..., None]
+        q = q_stacked(th1, T2, cross)
 
         I = np.empty((Ne, Q, B, 18), dtype=dt)
         t = np.empty((Ne, Q, B, 6), dtype=dt)
@@ -450,15 +409,3 @@ class SpectralBeamElements:
             if capture is not None:
                 capture["tip"] = tip
         return out
-
-    def _tip_body_loads(self, yd, y, g):
-        """(B, 6) loads of the rigid tip body on the tip node (BeamElements' formula)."""
-        o = ROOT_SIZE + BLOCK_SIZE * (self.N - 1)
-        th, V, Om = y[:, o + 9:o + 12], y[:, o + 12:o + 15], y[:, o + 15:o + 18]
-        Vd, Omd = yd[:, o + 12:o + 15], yd[:, o + 15:o + 18]
-        F = -self.tip_mass * (Vd + cross3(Om, V))
-        if g is not None:
-            F = F + self.tip_mass * rot_apply(th, g)
-        J = self.tip_inertia
-        M = -(Omd @ J.T + cross3(Om, Om @ J.T))
-        return np.concatenate([F, M], -1)

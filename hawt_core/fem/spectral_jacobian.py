@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from .beam import BLOCK_SIZE, ROOT_SIZE
-from .beam_jacobian import PointwiseBeamJacobian, _FIELDS, _LOADS
+from .beam_jacobian import PointwiseBeamJacobian, _FIELDS, _LOADS, field_seeds
 from .spectral import SpectralBeamElements
 
 
@@ -35,18 +35,8 @@ class SpectralPointwiseJacobian(PointwiseBeamJacobian):
         self.Ne, self.p, self.Q = Ne, p, Q
         self.n_beam = beam.n
         self.n = beam.n + self.k * N * G
-        D = self.directions = _FIELDS + _LOADS + self.k
-        blocks = ROOT_SIZE + BLOCK_SIZE * np.arange(N)
-        seeds = np.zeros((D, self.n))
-        for f in range(_FIELDS):
-            seeds[f, blocks + 6 + f] = 1.0
-            if f >= 6:
-                seeds[f, f] = 1.0
-        for m in range(_LOADS):
-            seeds[_FIELDS + m, blocks + m] = 1.0
-        for j in range(self.k):
-            seeds[_FIELDS + _LOADS + j, self.n_beam + j * N * G + np.arange(N * G)] = 1.0
-        self.seeds = seeds
+        self.directions = _FIELDS + _LOADS + self.k
+        self.seeds = field_seeds(self.n, self.n_beam, N, G, self.k)
         #: the clamped root: how far a u, theta step moves element 0's Gauss points
         self._root_scale = 1.0 - beam._Lq[:, 0]
         nn, nf = 12 * (p + 1), 6 * p
