@@ -525,13 +525,14 @@ def test_action_progress_and_cancel(spawn):
     assert h.accepted
     res = cli.result(h.get_result_async(), 120.0)
     assert res.status == GoalStatus.STATUS_SUCCEEDED and res.result.success, res.result.message
-    # feedback and result travel on different topics: on a loaded machine the last
-    # feedback (progress 1) can arrive after the result (seen once beside a busy process)
-    wait_until(lambda: fb1 and fb1[-1].progress == pytest.approx(1.0), 10.0,
-               what="the final feedback")
     prog = [f.progress for f in fb1]
     print(f"\naction feedback: {[(round(f.progress, 2), f.stage) for f in fb1]}")
-    assert len(prog) >= 3 and prog == sorted(prog) and prog[-1] == pytest.approx(1.0)
+    # the node publishes every stage up to 1 ("done") before the result, but feedback and
+    # result travel on different channels, and rclpy's ActionClient drops the feedback it
+    # takes after the goal's result (_remove_pending_result_request deletes the callback):
+    # on a loaded machine the final "done" (and any stage published just before it) can be
+    # lost that way (seen beside a busy process): the stages that arrive must increase
+    assert len(prog) >= 3 and prog == sorted(prog) and len(set(prog)) >= 3, prog
     assert res.result.settings.elements == 2 and len(res.result.modes) > 5
     # 2. a long analysis, cancelled after its first feedback
     fb2 = []
