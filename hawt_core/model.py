@@ -146,6 +146,13 @@ class Beam:
     tip_inertia: tuple = (0.0, 0.0, 0.0)
     order: int = 1
 
+    def mesh_text(self, elements=None) -> str:
+        """"3 elements of order 6" or "4 elements" (the paper's element): the mesh of
+        ``elements`` (default this beam's) elements of this beam's order, for messages."""
+        n = int(elements or self.elements)
+        return f"{n} element{'s' if n != 1 else ''}" + \
+            (f" of order {int(self.order)}" if int(self.order) > 1 else "")
+
 
 @dataclass(frozen=True)
 class Hub:

@@ -18,11 +18,14 @@ import pytest
 from hawt_core.analyses.accuracy import converge, with_error_estimates
 from hawt_core.analyses.blade_modes import blade_modes
 from hawt_core.cli import main as hawt_main
+from meshes import paper_mesh
 from test_real_turbines import euler_bernoulli_blade, quiet_load
 
 
 def _blade(name):
-    t = quiet_load(name)
+    """The shipped blade on the paper's element (the Richardson estimate's subject; the
+    p-version's estimate is tested below)."""
+    t = paper_mesh(quiet_load(name))
     return replace(t, rotor=replace(t.rotor, precone=0.0))
 
 
@@ -56,10 +59,18 @@ def test_a_mesh_chosen_for_1e_3_is_within_1e_3_of_the_independent_solution():
 
 
 def test_cli_error_estimate_and_accuracy(capsys):
-    assert hawt_main(["blade-modes", "nrel5mw", "-n", "8", "--count", "3",
+    assert hawt_main(["blade-modes", "nrel5mw", "-n", "8", "--order", "1", "--count", "3",
                       "--error-estimate"]) == 0
     out = capsys.readouterr().out
     assert "est. error" in out and "Richardson from 4 and 8 elements" in out
+    # the file's mesh (3 elements of order 6): the estimate against order 5, every one of
+    # the default modes printed below 1e-4 (their true error: 3e-5, bench/discretization.py)
+    assert hawt_main(["blade-modes", "nrel5mw", "--error-estimate", "--json"]) == 0
+    import json
+    data = json.loads(capsys.readouterr().out)
+    assert data["settings"]["elements"] == 3 and data["settings"]["order"] == 6
+    assert data["settings"]["error_estimate"]["orders"] == [5, 6]
+    assert max(abs(m["frequency_error"]) for m in data["modes"][:6]) < 1e-2
     assert hawt_main(["blade-modes", "nrel5mw", "--accuracy", "0.7"]) == 2
     assert "--accuracy" in capsys.readouterr().err
     assert hawt_main(["modes", "paper", "-n", "2", "--error-estimate",
@@ -72,13 +83,13 @@ def test_accuracy_applies_to_the_modes_asked_for_and_names_the_one_that_limits(c
     reach 1e-3 within 256 elements: the refusal names the mode that limits the mesh; the 10
     lowest (the default with --accuracy) and the modes below 10 Hz do, and every mode
     printed then has an estimated error below the tolerance."""
-    assert hawt_main(["blade-modes", "nrel5mw", "-n", "8", "--accuracy", "1e-3",
-                      "--count", "30"]) == 2
+    assert hawt_main(["blade-modes", "nrel5mw", "-n", "8", "--order", "1", "--accuracy",
+                      "1e-3", "--count", "30"]) == 2
     err = capsys.readouterr().err
     assert "the 30 lowest modes" in err and "the mode " in err and " Hz) is still at" in err
     for extra, n_modes in ((["--json"], 10), (["--max-hz", "10", "--json"], None)):
-        assert hawt_main(["blade-modes", "nrel5mw", "-n", "8", "--accuracy", "1e-3"]
-                         + extra) == 0
+        assert hawt_main(["blade-modes", "nrel5mw", "-n", "8", "--order", "1", "--accuracy",
+                          "1e-3"] + extra) == 0
         import json
         data = json.loads(capsys.readouterr().out)
         modes = data["modes"]

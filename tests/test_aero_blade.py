@@ -20,7 +20,7 @@ import pytest
 
 from hawt_core.aero import BemRotor, StationPolars
 from hawt_core.assembly.aero_blade import AeroelasticBlade
-from hawt_core.io.catalog import load_any
+from meshes import load_paper_mesh
 
 U, TSR = 8.0, 7.5
 
@@ -28,7 +28,7 @@ U, TSR = 8.0, 7.5
 def nrel5mw(stiffness=1.0, precone=0.0):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        t = load_any("nrel5mw")
+        t = load_paper_mesh("nrel5mw")
     sec = t.blade.sections
     kw = {k: getattr(sec, k) * stiffness for k in ("gj", "ei2", "ei3", "ea", "ga2", "ga3")
           if getattr(sec, k) is not None}

@@ -27,12 +27,13 @@ from hawt_core.model import Drivetrain
 from hawt_core.solvers import periodic as periodic_module
 from hawt_core.solvers.equilibrium import (NoEquilibrium, check_equilibrium_exists,
                                            unbalanced_forces)
+from meshes import load_paper_mesh
 
 RPM9 = 9.0 * math.pi / 30.0
 
 
 def nrel5mw(generator="free", simple=False):
-    t = load_any("nrel5mw")
+    t = load_paper_mesh("nrel5mw")
     t = dc.replace(t, rotor=dc.replace(t.rotor, pitch=0.0),
                    drivetrain=dc.replace(t.drivetrain, generator=generator))
     if simple:    # a constant steady state: no gravity, tilt or tower
@@ -135,7 +136,7 @@ def test_round_off_is_not_a_force():
 
 def test_continuation_advice_fits_the_turbine():
     """No free-yaw advice for a locked yaw (the old message gave it to every turbine)."""
-    t = load_any("nrel5mw")
+    t = load_paper_mesh("nrel5mw")
     locked = dc.replace(t, nacelle=dc.replace(t.nacelle, yaw_free=False))
     assert "yaw" not in periodic_module._continuation_hint(locked)
     assert "yaw" not in periodic_module._homotopy_description(locked)

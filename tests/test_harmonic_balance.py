@@ -22,10 +22,10 @@ import pytest
 from hawt_core.aero.wind import Wind
 from hawt_core.assembly import TurbineModel
 from hawt_core.io import load_turbine
-from hawt_core.io.catalog import load_any
 from hawt_core.solvers import periodic
 from hawt_core.solvers.periodic import (_harmonic_balance, _relabelling_symmetry,
                                         periodic_steady_state)
+from meshes import load_paper_mesh
 
 PAPER = load_turbine()
 
@@ -36,7 +36,7 @@ def nrel_in_sheared_yawed_wind(elements=4, tower_shadow=True):
     periodic."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        t = load_any("nrel5mw")
+        t = load_paper_mesh("nrel5mw")
     t = dc.replace(t, rotor=dc.replace(t.rotor, speed=9.09 * np.pi / 30, pitch=0.0))
     wind = Wind(8.0, direction=np.radians(10.0), shear_exponent=0.2,
                 tower_radius=3.0 if tower_shadow else 0.0)

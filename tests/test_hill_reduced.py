@@ -17,11 +17,12 @@ import hawt_core.solvers.hill_reduced as hr
 from hawt_core.aero.wind import Wind
 from hawt_core.analyses.modal import _fourier_tol, periodic_dae
 from hawt_core.assembly import TurbineModel
-from hawt_core.io.catalog import load_any, shipped_controller
+from hawt_core.io.catalog import shipped_controller
 from hawt_core.io.discon import discon_schedule
 from hawt_core.io.turbine_yaml import load_turbine
 from hawt_core.solvers.multiblade import MultiBladeTransform
 from hawt_core.solvers.periodic import periodic_steady_state
+from meshes import load_paper_mesh
 
 
 def multiblade_system(turbine, elements, wind=None):
@@ -57,7 +58,7 @@ def agreement(got, ref, w):
 
 @pytest.fixture(scope="module")
 def nrel_8ms():
-    t = load_any("nrel5mw")
+    t = load_paper_mesh("nrel5mw")
     from hawt_core.analyses.operating_points import at_operating_point
     at, _ = at_operating_point(t, 8.0, discon_schedule(shipped_controller("nrel5mw")), None)
     return multiblade_system(at, 8, Wind(8.0))
@@ -92,7 +93,7 @@ def test_five_blades_with_gravity_and_tilt_equal_the_whole_pencil():
     the 5 deg tilt at 12.1 rpm, 6 elements, below 20 per-rev (multi-blade coordinates with
     two cyclic pairs and the 5 per-rev periodicity): the modal basis against the whole
     pencil (1e-7), 2e-6 relative."""
-    t = load_any("nrel5mw")
+    t = load_paper_mesh("nrel5mw")
     five = dc.replace(t, rotor=dc.replace(t.rotor, blades=5))
     system = multiblade_system(five, 6)
     got = modes(system, 20.0)

@@ -31,9 +31,9 @@ import yaml
 from hawt_core.aero.wind import Wind
 from hawt_core.assembly import TurbineModel
 from hawt_core.assembly.aero_blade import AeroelasticBlade
-from hawt_core.io.catalog import load_any
 from hawt_core.io import dump_turbine, load_turbine, turbine_from_dict
 from hawt_core.solvers.steady import constant_steady_state
+from meshes import load_paper_mesh
 
 RHO = 1.225
 LIFT_SLOPE = 2 * np.pi
@@ -60,7 +60,7 @@ def teetering_rotor(stiffness=1e3, gravity=False, tilt=0.0, yaw_free=False):
 def nrel5mw():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return load_any("nrel5mw")
+        return load_paper_mesh("nrel5mw")
 
 
 def axisymmetric(t, rpm=9.16, pitch_deg=0.0):

@@ -20,12 +20,7 @@ from scipy.optimize import brentq
 from ..assembly.aero_blade import AeroelasticBlade
 from ..results.operating import OperatingPoints
 
-__all__ = ["operating_points", "at_operating_point", "DEFAULT_ELEMENTS"]
-
-#: Elements per blade of the operating-point model: for the NREL 5-MW at 8 m/s, power and
-#: thrust at 16 are within 0.1 % of 64, the tip deflection within 2.2 % (32: 0.4 %);
-#: --elements 32 for deflections (tests/test_operating_points.py).
-DEFAULT_ELEMENTS = 16
+__all__ = ["operating_points", "at_operating_point"]
 
 
 def _check_schedule(s: dict) -> dict:
@@ -53,12 +48,14 @@ def operating_points(turbine, wind_speeds, schedule: dict, elements: Optional[in
                      rho: float = 1.225, progress=None) -> OperatingPoints:
     """One aeroelastic operating point per wind speed [m/s]; ``schedule``: rated_power [W,
     electrical], efficiency [-], rated_speed and min_speed [rad/s], tsr [-], fine_pitch and
-    max_pitch [rad, towards feather] (io/discon.py reads them from a DISCON.IN)."""
+    max_pitch [rad, towards feather] (io/discon.py reads them from a DISCON.IN).
+    ``elements``: per blade, of the blade's order (default: the turbine file's mesh, which
+    for the shipped turbines puts the tip deflection within 1e-4 of converged)."""
     s = _check_schedule(dict(schedule))
     winds = np.asarray(wind_speeds, float)
     if winds.ndim != 1 or winds.size < 1 or np.any(~(winds > 0)):
         raise ValueError("wind_speeds: need wind speeds > 0 [m/s]")
-    n_el = int(elements or DEFAULT_ELEMENTS)
+    n_el = int(elements or turbine.blade.elements)
     R = turbine.hub.radius + turbine.blade.length
     Bn = turbine.rotor.blades
     points = []
@@ -118,7 +115,9 @@ def operating_points(turbine, wind_speeds, schedule: dict, elements: Optional[in
         if progress is not None:
             progress((i + 1) / winds.size, f"{U:.3g} m/s")
     return OperatingPoints(turbine=turbine.name, points=points, schedule=s,
-                           settings={"elements": n_el, "density": rho,
+                           settings={"elements": n_el,
+                                     "order": int(getattr(turbine.blade, "order", 1)),
+                                     "density": rho,
                                      "model": "one blade per blade on the spinning hub, BEM "
                                               "(Prandtl, Buhl) at the Gauss points, axial wind"})
 

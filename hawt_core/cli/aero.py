@@ -410,7 +410,7 @@ def schedule_from_args(args) -> dict:
                      "deflections.")
 def cmd_operating_points(args) -> int:
     from ..analyses.operating_points import operating_points
-    turbine = load(args.turbine)
+    turbine = load(args.turbine, args.order)
     schedule = schedule_from_args(args)
     return report(args, lambda status: operating_points(
         turbine, args.wind, schedule, elements=args.elements, progress=status))
@@ -441,7 +441,7 @@ def schedule_args(p):
 
 @cmd_operating_points.arguments
 def _operating_points_args(p):
-    from .parser import elements_type
+    from .parser import elements_arg
     turbine_arg(p)
     p.add_argument("--wind", type=grid_type("--wind", 0.1, 100.0, "m/s"), default="3:25:23",
                    metavar="START:STOP:COUNT", help="wind speeds [m/s] (default 3:25:23)")
@@ -449,8 +449,7 @@ def _operating_points_args(p):
                    help="ROSCO controller file with the schedule (default for nrel5mw and "
                         "iea15mw: the rosco wheel's)")
     schedule_args(p)
-    p.add_argument("--elements", "-n", type=elements_type, default=None, metavar="N",
-                   help="elements per blade (default 16)")
+    elements_arg(p)
     p.add_argument("--json", action="store_true",
                    help='print {"points": [{"wind_speed", "rotor_speed_rpm", "pitch_deg", ...}]}')
     p.add_argument("--plot", metavar="FILE.png", default=None,

@@ -15,7 +15,7 @@ from .status import ProgressLine
                      "modes of the paper's Table 2). Prints a table, or JSON with --json.")
 def cmd_blade_modes(args) -> int:
     from ..analyses.blade_modes import blade_modes
-    turbine = load(args.turbine)
+    turbine = load(args.turbine, args.order)
     count = args.count
     if args.accuracy is not None and count is None and args.max_hz is None:
         count = ACCURACY_COUNT
@@ -69,7 +69,7 @@ def cmd_modes(args) -> int:
     from ..analyses.modal import modal_analysis
     from .aero import check_wind_args, turbine_in_wind
     check_wind_args(args)
-    turbine = load(args.turbine)
+    turbine = load(args.turbine, args.order)
     wind, point = None, None
     if args.wind is not None:
         turbine, wind, point = turbine_in_wind(args, turbine)
@@ -137,7 +137,7 @@ def cmd_campbell(args) -> int:
     if not abs(args.wind_direction) < 90.0:
         raise ValueError(f"--wind-direction: {args.wind_direction!r} is not allowed; need "
                          "-90 < DEG < 90 (the rotor faces the wind)")
-    turbine = load(args.turbine)
+    turbine = load(args.turbine, args.order)
     schedule = None
     if args.wind is not None:
         path, schedule = controller_schedule(args)

@@ -10,7 +10,8 @@ import math
 from typing import Callable, Optional
 
 __all__ = ['EXIT_USAGE', 'CliError', 'Parser', 'COMMANDS', 'command', 'positive_int',
-           'finite_float', 'checked', 'elements_type', 'rotor_speed_type', 'step_deg_type',
+           'finite_float', 'checked', 'elements_type', 'order_type', 'rotor_speed_type',
+           'step_deg_type',
            'turbine_arg', 'elements_arg', 'model_args', 'load', 'accuracy_type',
            'refined_runner', 'with_accuracy', 'steps_type', 'per_rev', 'marching_args',
            'speeds_type', 'MAX_SPEEDS']
@@ -114,9 +115,25 @@ def turbine_arg(p):
                         "Table 1 turbine")
 
 
+def order_type(text: str) -> int:
+    """argparse type of --order: the polynomial degree of the blade's beam elements."""
+    from ..numerics.limits import MAX_ORDER
+    try:
+        v = int(text)
+    except ValueError:
+        v = None
+    if v is None or not 1 <= v <= MAX_ORDER:
+        raise argparse.ArgumentTypeError(f"{text!r} is not allowed; need an integer from 1 (the "
+                                         f"paper's element) to {MAX_ORDER}")
+    return v
+
+
 def elements_arg(p):
     p.add_argument("--elements", "-n", type=elements_type, default=None, metavar="N",
                    help="finite elements per blade (default: the turbine file's)")
+    p.add_argument("--order", type=order_type, default=None, metavar="P",
+                   help="polynomial degree of the blade's elements: 1 = the paper's mixed "
+                        "element, 2 and more its p-version (default: the turbine file's)")
 
 
 def accuracy_type(text: str) -> float:
@@ -180,11 +197,15 @@ def with_accuracy(args, turbine, analysis, progress=None, scope="the modes print
     return run(n0)
 
 
-def load(path):
+def load(path, order=None):
     """The turbine of ``path``: a file, an OpenFAST deck or a shipped name (None: the paper's
-    Table 1 turbine)."""
+    Table 1 turbine); ``order`` (--order) given, its blade's elements of that degree."""
     from ..io.catalog import load_any
-    return load_any(path)
+    turbine = load_any(path)
+    if order is not None:
+        from dataclasses import replace
+        turbine = replace(turbine, blade=replace(turbine.blade, order=int(order)))
+    return turbine
 
 
 # ---------------------------------------------------------------------------- modes

@@ -4,7 +4,7 @@ imported when the command runs, so that ``import hawt_core.cli`` stays cheap).
 
 from __future__ import annotations
 
-from .parser import (command, elements_type, finite_float, load, rotor_speed_type,
+from .parser import (command, elements_arg, finite_float, load, rotor_speed_type,
                      step_deg_type, turbine_arg)
 from .status import ProgressLine
 
@@ -36,7 +36,7 @@ def cmd_simulate(args) -> int:
     if args.wind is None and schedule_given(args):
         raise ValueError("--rated-power/--rated-rpm/--min-rpm/--tsr-opt/--efficiency/"
                          "--fine-pitch: only used with --wind U")
-    turbine = load(args.turbine)
+    turbine = load(args.turbine, args.order)
     if args.lock_yaw:
         from dataclasses import replace
         turbine = replace(turbine, nacelle=replace(turbine.nacelle, yaw_free=False))
@@ -158,8 +158,7 @@ def _simulate_args(p):
                    help="simulated time [s]")
     p.add_argument("--step-deg", type=step_deg_type, default=1.0, metavar="DEG",
                    help="time step in rotor azimuth [deg] (default 1, at most 10)")
-    p.add_argument("--elements", "-n", type=elements_type, default=None, metavar="N",
-                   help="finite elements per blade (default: the turbine file's)")
+    elements_arg(p)
     p.add_argument("--perturb", default=None, metavar="NAME=VALUE,...",
                    help="initial perturbations of yaw, yaw_rate, teeter, teeter_rate "
                         "[rad, rad/s], e.g. teeter=0.02,yaw_rate=0.01")

@@ -26,10 +26,13 @@ def package_version(dist: str) -> str:
         return "unknown"
 
 
-#: Finite elements of an imported blade and tower (hawt files must name them): 64 per
-#: blade put the NREL 5-MW blade's first five frequencies within 0.1 % of converged (the
-#: Richardson estimates of ``--error-estimate``: 0.08 % flap 1, 0.05 % edge 1).
-ELEMENTS = {"blade": 64, "tower": 16}
+#: The mesh of an imported blade and tower (hawt files must name it): elements of the
+#: p-version of the paper's mixed element (fem/spectral.py).  3 blade elements of order 6 put
+#: the first six frequencies of the NREL 5-MW and IEA 15-MW blades at 0 and rated rpm within
+#: 8e-5 of converged (64 of the paper's element: 1.7e-3, bench/discretization.py), and the
+#: steady tip deflection within 2e-4 (bench/live_default.py); 2 tower elements of order 4 put
+#: the first four tower frequencies within 2e-6 (16 paper elements: 4.7e-3).
+ELEMENTS = {"blade": {"elements": 3, "order": 6}, "tower": {"elements": 2, "order": 4}}
 
 #: The IEC blade section frame (x flapwise towards the suction side / the tower of an
 #: upwind rotor, y chordwise towards the trailing edge, z along the span), in which BeamDyn

@@ -492,7 +492,7 @@ def _blade(deck: _Deck, comp: dict, ed_file: Path, nb: int, length: float) -> Be
         sec = sections_from_matrices(bd["stations"], untwist_sections(bd["K"], bd["twist"]),
                                      untwist_sections(bd["M"], bd["twist"]),
                                      prebend=bd["prebend"], sweep=bd["sweep"])
-        return Beam(length=bd["length"], sections=sec, elements=ELEMENTS["blade"])
+        return Beam(length=bd["length"], sections=sec, **ELEMENTS["blade"])
 
     # ElastoDyn blade (CompElast = 1)
     fl = deck.vt["ElastoDyn"]
@@ -548,7 +548,7 @@ def _blade(deck: _Deck, comp: dict, ed_file: Path, nb: int, length: float) -> Be
             "them in the hawt file if known")
         sec = SectionTable(stations=x, mass=mass, i1=2 * i23, i2=i23, i3=i23, gj=gj,
                            ei2=ei2, ei3=ei3, twist=twist)
-    return Beam(length=length, sections=sec, elements=ELEMENTS["blade"])
+    return Beam(length=length, sections=sec, **ELEMENTS["blade"])
 
 
 def _tower(deck: _Deck, ed_file: Path, flexible: bool) -> Beam | None:
@@ -586,7 +586,7 @@ def _tower(deck: _Deck, ed_file: Path, flexible: bool) -> Beam | None:
         "rigid as in ElastoDyn")
     sec = SectionTable(stations=t["HtFract"], mass=mass, i1=2 * i23, i2=i23, i3=i23, gj=gj,
                        ei2=ei2, ei3=ei3)
-    return Beam(length=height, sections=sec, elements=ELEMENTS["tower"])
+    return Beam(length=height, sections=sec, **ELEMENTS["tower"])
 
 
 def _servodyn(deck: _Deck, comp: dict) -> dict | None:

@@ -301,7 +301,7 @@ def _blade(f: _File) -> Beam:
     span, sweep, prebend = axis.stations(stations)
     sec = sections_from_matrices(span, untwist_sections(K, twist), untwist_sections(M, twist),
                                  prebend=prebend, sweep=sweep)
-    return Beam(length=length, sections=sec, elements=ELEMENTS["blade"])
+    return Beam(length=length, sections=sec, **ELEMENTS["blade"])
 
 
 def _damping(f: _File, key: str):
@@ -366,7 +366,7 @@ def _tower(f: _File) -> Beam | None:
     _damping(f, key)
     sec = SectionTable(stations=stations, mass=mass, i1=2 * i23, i2=i23, i3=i23, gj=k["K66"],
                        ei2=k["K55"], ei3=k["K44"])
-    return Beam(length=height, sections=sec, elements=ELEMENTS["tower"])
+    return Beam(length=height, sections=sec, **ELEMENTS["tower"])
 
 
 def _rigid_body(f: _File, key: str):

@@ -24,7 +24,8 @@ class Recording:
             turbine_yaml = None
         s = self.settings
         settings = {"node": self.get_fully_qualified_name(), "turbine": self.turbine_path,
-                    "elements": self.model.beam.elements, "step_deg": s.step_deg,
+                    "elements": self.model.beam.elements,
+                    "order": int(getattr(self.turbine.blade, "order", 1)), "step_deg": s.step_deg,
                     "publish_rate": s.publish_rate, "real_time_factor": s.real_time_factor,
                     "perturb": dict(s.perturb), "marker_frame": s.marker_frame,
                     "simulation": self.sim_source, "wind": s.wind,

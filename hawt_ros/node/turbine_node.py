@@ -160,8 +160,9 @@ class HawtNode(Pacing, StatePublisher, Recording, AnalysisServer, Overrides, Nod
         s = self.settings
         self._check_step_rate()
         self.get_logger().info(
-            f"turbine '{self.turbine.name}' ({self.turbine_path}), {self.model.beam.elements} elements "
-            f"per blade, {self.n_blades} blades, rotor speed {self.omega:.4g} rad/s; "
+            f"turbine '{self.turbine.name}' ({self.turbine_path}), "
+            f"{self.turbine.blade.mesh_text(self.model.beam.elements)} per blade, "
+            f"{self.n_blades} blades, rotor speed {self.omega:.4g} rad/s; "
             f"simulation: {self.sim_source}, step {s.step_deg:g} deg = {self.dt * 1e3:.3f} ms; "
             f"publishing at {s.publish_rate:g} Hz, real_time_factor {s.real_time_factor:g}"
             + (" (stamps in simulation time, /clock published)" if s.real_time_factor == 0 else "")
@@ -173,7 +174,7 @@ class HawtNode(Pacing, StatePublisher, Recording, AnalysisServer, Overrides, Nod
 
         self.get_logger().info(
             f"turbine '{self.turbine.name}' read; building its model "
-            f"({self.settings.elements or self.turbine.blade.elements} elements per blade) and "
+            f"({self.turbine.blade.mesh_text(self.settings.elements)} per blade) and "
             "the steady state (Ctrl-C stops)")
         try:
             self.model = TurbineModel(self.turbine, elements=self.settings.elements or None)
@@ -214,8 +215,8 @@ class HawtNode(Pacing, StatePublisher, Recording, AnalysisServer, Overrides, Nod
                                "at its operating point)")
         self.get_logger().info(
             f"turbine '{self.turbine.name}' read; finding its operating point at {s.wind:g} m/s "
-            f"and starting it under {name} ({s.elements or self.turbine.blade.elements} "
-            "elements per blade; Ctrl-C stops)")
+            f"and starting it under {name} ({self.turbine.blade.mesh_text(s.elements)} per "
+            "blade; Ctrl-C stops)")
         try:
             wind = s.wind_series.for_turbine(self.turbine) if s.wind_series else \
                 Wind(float(s.wind))
