@@ -48,7 +48,13 @@ def rigid_hub_rotor(blades, tower=False, **nacelle):
 CASES = [pytest.param(rigid_hub_rotor(3), id="3-blades-free-yaw"),
          pytest.param(rigid_hub_rotor(4, shaft_tilt=0.1), id="4-blades-free-yaw-tilt"),
          pytest.param(rigid_hub_rotor(5), id="5-blades-free-yaw"),
-         pytest.param(rigid_hub_rotor(3, tower=True), id="3-blades-flexible-tower")]
+         pytest.param(rigid_hub_rotor(3, tower=True), id="3-blades-flexible-tower"),
+         # the p-version (fem/spectral.py) on the blades and the tower: the same three routes
+         pytest.param(dc.replace(rigid_hub_rotor(3, tower=True),
+                                 blade=dc.replace(PAPER.blade, order=3),
+                                 tower=dc.replace(tower_beam(25.0, 400.0, 6e8, 6e8, 1.5e9,
+                                                             300.0, 2, False), order=3)),
+                      id="3-blades-flexible-tower-order-3")]
 
 
 def coleman(model, y, t):
@@ -94,7 +100,7 @@ def coleman_eigenvalues(model, y, band):
 @pytest.mark.parametrize("turbine", CASES)
 def test_floquet_equals_multiblade_eigenvalues(turbine):
     """Three routes to the exponents of the same discretized equations (N = 3):
-    (1) the independent dense Coleman transform above: constant to 1e-12 over a revolution,
+    (1) the independent dense Coleman transform above: constant to 1e-11 over a revolution,
     its finite eigenvalues; (2) hawt's multi-blade path (method="hill": Hill's method with
     constant coefficients, one sparse eigenproblem); (3) the rotating-frame Floquet monodromy
     (Radau IIA, 400 steps, Fast Floquet over T/Nb).  Every exponent below 8 per-rev of (3)
@@ -104,11 +110,19 @@ def test_floquet_equals_multiblade_eigenvalues(turbine):
     model = TurbineModel(turbine, elements=3)
     y = constant_steady_state(model)
     ref, change = coleman_eigenvalues(model, y, 9.0)
-    assert change < 1e-12
+    assert change < 1e-11             # round-off (paper's element ~1e-13, order 3 ~6e-12)
     mbc = modal_analysis(turbine, elements=3, method="hill", max_per_rev=9.0)
     flo = modal_analysis(turbine, elements=3, method="radau", steps=400)
-    assert mbc.settings["frame"] == "multi-blade" and mbc.settings["hill_harmonics"] == 0
+    assert mbc.settings["frame"] == "multi-blade"
+    # constant coefficients: no harmonic kept (order 3: the round-off variation above, 6e-12
+    # of the largest entry, is above the Fourier trim's 1e-12, so one harmonic is kept;
+    # the exponents below are the same)
+    assert mbc.settings["hill_harmonics"] <= (0 if turbine.blade.order == 1 else 1)
     assert flo.settings["fast"]
+
+    # the monodromy of the p-version (order 3) carries the round-off of its stiffer spectrum
+    # (test_undamped_rotor_is_neutrally_stable): 1e-7 there (observed 1.05e-8)
+    marching_tol = 1e-8 if turbine.blade.order == 1 else 1e-7
 
     def check(eta, shift_allowed):
         d = ref - eta
@@ -117,7 +131,8 @@ def test_floquet_equals_multiblade_eigenvalues(turbine):
         j = int(np.argmin(np.abs(d)))
         zero = abs(ref[j]) < 1e-6
         err = abs(d[j]) if zero else abs(d[j]) / abs(ref[j])
-        assert err < (1e-6 if zero else 1e-8), (eta, ref[j], err)
+        assert err < (1e-6 if zero else marching_tol if shift_allowed else 1e-8), \
+            (eta, ref[j], err)
         return err
     worst = 0.0
     for m in mbc.modes:
@@ -142,14 +157,18 @@ def test_undamped_rotor_is_neutrally_stable(turbine):
     (the fixed-frame equations are those of an SPD mass, a skew gyroscopic and a PSD
     stiffness matrix), in the multi-blade eigenproblem and in the Floquet monodromy (Radau
     IIA with 800 steps: its numerical dissipation at 8 per-rev is ~1e-10 per-rev there,
-    ~1e-8 with 400).  The free yaw angle's defective double zero splits by O(sqrt(eps)) in
+    ~1e-8 with 400; with the p-version 3e-6, round-off, see below).  The free yaw angle's defective double zero splits by O(sqrt(eps)) in
     the marching: |eta| < 1e-6 per-rev there."""
     for method in ("hill", "radau"):
         r = modal_analysis(turbine, elements=3, method=method, max_per_rev=9.0, steps=800
                            if method == "radau" else None)
         worst = max(abs(m.real_per_rev) for m in r.modes
                     if m.fixed_frame_per_rev < 8 and m.family != "yaw")
-        assert worst < 1e-8, (method, worst)
+        # the p-version's monodromy (order 3): 5.4e-7 at 800 steps and 1.5e-6 at 1600, i.e.
+        # round-off accumulated over the steps (its stiffer spectrum), not the method's
+        # dissipation (which falls with the steps); Hill's method stays at 1e-12 there
+        tol = 1e-8 if method == "hill" or turbine.blade.order == 1 else 3e-6
+        assert worst < tol, (method, worst)
         assert all(abs(complex(m.real_per_rev, m.frequency_per_rev)) < 1e-6
                    for m in r.modes if m.family == "yaw")
 
