@@ -63,10 +63,19 @@ class SpectralPointwiseJacobian(PointwiseBeamJacobian):
                   + np.arange(Q)[None, :]).ravel()
             rows[e] = np.concatenate([nr, fm, st])
             cols[e] = np.concatenate([nc, fm, st])
-        keep = np.broadcast_to(cols[:, None, :] >= 0, (Ne, L, L))
-        self._keep = keep.ravel()
-        self._rows = np.broadcast_to(rows[:, :, None], (Ne, L, L)).ravel()[self._keep]
-        self._cols = np.broadcast_to(cols[:, None, :], (Ne, L, L)).ravel()[self._keep]
+        # the entries that can be nonzero (an element block is dense only where the
+        # equations couple: about a quarter of dR/dy's and nine tenths of dR/dydot's L x L
+        # entries are structural zeros, which would cost their share of every product and
+        # fill the LU factors)
+        self._keep = {}
+        self._rows, self._cols = {}, {}
+        for rates in (False, True):
+            keep = (cols[:, None, :] >= 0) & self._structure(rates)[None]
+            self._keep[rates] = keep.ravel()
+            self._rows[rates] = np.broadcast_to(rows[:, :, None], (Ne, L, L)).ravel()[
+                self._keep[rates]]
+            self._cols[rates] = np.broadcast_to(cols[:, None, :], (Ne, L, L)).ravel()[
+                self._keep[rates]]
         const = np.zeros((Ne, L, L))
         i6 = np.eye(6)
         for j in range(p + 1):
@@ -77,6 +86,41 @@ class SpectralPointwiseJacobian(PointwiseBeamJacobian):
                     beam._D[:, k, j, None, None] * i6
         self._const = const
         self._root = (np.arange(6), np.arange(6), -np.ones(6))
+
+    def _structure(self, rates: bool) -> np.ndarray:
+        """(L, L) the element block's entries that can be nonzero in dR/dy (``rates``
+        False) or dR/dydot.  Local rows: per node [equilibrium 6, kinematics 6], per
+        section-load point [strain-displacement 6], the states (state-major); columns: per
+        node [u, theta, V, Omega], per point [F, M], the states.  What the equations read:
+        equilibrium rows every unknown (with the rates: the node fields', through the
+        momenta, the section loads' Vdot, Omegadot and the tip body); kinematics rows the
+        node fields (with the rates: udot, thetadot); strain rows u', theta' and theta, F, M
+        (no rate); a state row its own Gauss point's states and every field and load of the
+        element (its rates: its own states' and the fields').  Verified against the dense
+        complex step in tests/test_spectral.py."""
+        p, Q, k, nn, nf, L = self.p, self.Q, self.k, self._nn, self._nf, self.local
+        node = np.arange(nn) % 12
+        eq_rows, kin_rows = np.r_[node < 6, np.zeros(nf + k * Q, bool)], \
+            np.r_[node >= 6, np.zeros(nf + k * Q, bool)]
+        strain_rows = np.r_[np.zeros(nn, bool), np.ones(nf, bool), np.zeros(k * Q, bool)]
+        state = np.r_[np.zeros(nn + nf, bool), np.ones(k * Q, bool)]
+        node_cols = np.r_[np.ones(nn, bool), np.zeros(nf + k * Q, bool)]
+        u_theta = np.r_[node < 6, np.zeros(nf + k * Q, bool)]
+        load_cols = np.r_[np.zeros(nn, bool), np.ones(nf, bool), np.zeros(k * Q, bool)]
+        point = np.full(L, -1)
+        point[nn + nf:] = np.tile(np.arange(Q), k)            # the states' Gauss points
+        same_point = state[:, None] & state[None, :] & (point[:, None] == point[None, :])
+        M = np.zeros((L, L), bool)
+        if rates:
+            M |= eq_rows[:, None] & node_cols[None, :]
+            M |= kin_rows[:, None] & u_theta[None, :]
+            M |= state[:, None] & node_cols[None, :]
+        else:
+            M |= eq_rows[:, None]
+            M |= kin_rows[:, None] & node_cols[None, :]
+            M |= strain_rows[:, None] & (u_theta | load_cols)[None, :]
+            M |= state[:, None] & (node_cols | load_cols)[None, :]
+        return M | same_point
 
     def values(self, capture: dict, state_rows, h: float, blocks: int, rates: bool = False):
         """As PointwiseBeamJacobian.values, for the p-version's elements."""
@@ -122,9 +166,10 @@ class SpectralPointwiseJacobian(PointwiseBeamJacobian):
             idx = np.arange(Q)
             blk[:, :, :, idx, :, idx] = own.transpose(1, 0, 2, 3, 4)
             V[:, :, S, S] = blk.reshape(Ne, nb, k * Q, k * Q)
-        vals = V.transpose(1, 0, 2, 3).reshape(nb, -1)[:, self._keep]
+        vals = V.transpose(1, 0, 2, 3).reshape(nb, -1)[:, self._keep[rates]]
+        rows, cols = self._rows[rates], self._cols[rates]
         if rates:
-            return self._rows, self._cols, vals
+            return rows, cols, vals
         r0, c0, v0 = self._root
-        return (np.concatenate([self._rows, r0]), np.concatenate([self._cols, c0]),
+        return (np.concatenate([rows, r0]), np.concatenate([cols, c0]),
                 np.concatenate([vals, np.broadcast_to(v0, (nb, 6))], axis=1))
