@@ -65,7 +65,7 @@ hawt: starting the node (default: the NREL 5-MW in 15 m/s wind under ROSCO); rec
 Modal analysis on request, from another terminal in this folder:
   $hawt_cmd call modes                 # --json, --elements 8, --action (progress)
 With a full ROS 2 install (hawt_msgs built and sourced, same ROS_DOMAIN_ID):
-  ros2 service call /modal_analysis hawt_msgs/srv/ModalAnalysis "{elements: 4}"
+  ros2 service call /modal_analysis hawt_msgs/srv/ModalAnalysis "{}"
   ros2 topic echo /joint_states
 Ctrl-C stops the node and finalizes the recording.
 
