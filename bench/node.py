@@ -198,10 +198,14 @@ def bench_service(domain: int, tmp: Path, repeats: int) -> list:
     return rows
 
 
-def bench_wind_fast(domain: int, tmp: Path, duration: float) -> dict:
+def bench_wind_fast(domain: int, tmp: Path, duration: float, step_deg=None) -> dict:
     """The default node (NREL 5-MW, 15 m/s, ROSCO) as fast as possible: achieved real-time
-    factor from the stamps (simulation time) over ``duration`` s of wall time."""
-    node = Node({"real_time_factor": 0.0, "publish_rate": 20.0}, domain, tmp)
+    factor from the stamps (simulation time) over ``duration`` s of wall time (``step_deg``
+    given: at that step)."""
+    params = {"real_time_factor": 0.0, "publish_rate": 20.0}
+    if step_deg is not None:
+        params["step_deg"] = float(step_deg)
+    node = Node(params, domain, tmp)
     items, start_up = _collect(node, domain, duration, 120.0)
     mono = np.array([i[0] for i in items])
     st = np.array([i[2] for i in items], float)
@@ -265,6 +269,10 @@ def main(argv=None) -> int:
     ap.add_argument("--repeats", type=int, default=5, help="cached/invalid service calls")
     ap.add_argument("--no-service", action="store_true")
     ap.add_argument("--no-wind", action="store_true", help="skip the NREL 5-MW in wind")
+    ap.add_argument("--wind-steps", type=float, nargs="*", default=[],
+                    help="also run the default node as fast as possible at these step_deg")
+    ap.add_argument("--only-wind-steps", action="store_true",
+                    help="only the --wind-steps runs")
     args = ap.parse_args(argv)
     tmp = Path(tempfile.mkdtemp(prefix="hawt-bench-node-"))
     os.environ.setdefault("ROS_LOG_DIR", str(tmp / "roslog"))
@@ -275,6 +283,12 @@ def main(argv=None) -> int:
           f"{os.cpu_count()} CPUs, load {os.getloadavg()[0]:.1f})")
     print(f"{'rate req':>9} {'rtf':>5} {'msgs':>5} {'rate':>7} {'gap max':>8} {'latency med':>12} "
           f"{'p95':>7} {'max':>7} {'sim-time rate / achieved rtf':>30}")
+    if args.only_wind_steps:
+        for i, step in enumerate(args.wind_steps):
+            r = bench_wind_fast(base + i, tmp, max(args.duration, 10.0), step)
+            print(f"default node, step_deg {step:g}: real-time factor {r['rtf']:.2f} as fast as "
+                  f"possible (first message {r['start_up']:.1f} s)")
+        return 0
     for i, cfg in enumerate(args.configs):
         rate, rtf = (float(x) for x in cfg.split(":"))
         r = bench_publishing(rate, rtf, args.duration, base + i, tmp, args.step_deg, args.fake_sim)
@@ -298,10 +312,13 @@ def main(argv=None) -> int:
     if not args.no_wind:
         base += len(args.configs) + 1
         print("\nthe default node: NREL 5-MW in 15 m/s under ROSCO (the file's mesh: 3 blade "
-              "elements of order 6; 5 deg steps)")
+              "elements of order 6; its default step_deg)")
         r = bench_wind_fast(base, tmp, max(args.duration, 10.0))
         print(f"  as fast as possible: real-time factor {r['rtf']:.2f} (start-up to the first "
               f"message {r['start_up']:.1f} s)")
+        for i, step in enumerate(args.wind_steps):
+            r = bench_wind_fast(base + 2 + i, tmp, max(args.duration, 10.0), step)
+            print(f"  step_deg {step:g}: real-time factor {r['rtf']:.2f} as fast as possible")
         r = bench_wind_analyses(base + 1, tmp)
         print(f"  the in-wind modal analysis at the node's mesh (one request, elements 0): "
               f"{r['one_wall']:.1f} s round trip, {r['one_compute']:.1f} s compute, success "

@@ -1003,7 +1003,7 @@ def test_simulation_error_keeps_node_and_services_alive(spawn, failure, logged):
 
 
 def test_node_in_wind_operates_the_nrel5mw_under_rosco(spawn, tmp_path):
-    """wind:=15 on the NREL 5-MW (4 elements): the node starts at the schedule's operating
+    """wind:=15 on the NREL 5-MW (the file's mesh): the node starts at the schedule's operating
     point under ROSCO and publishes the blades deflected by the wind: blade 0's tip flap
     (out of plane, b3) above 1 m where the vacuum's is ~0 (reference: the aeroelastic steady
     state at 15 m/s, 3-5 m at this mesh, tests/test_control_loop.py); the rotor turns near
@@ -1024,7 +1024,7 @@ def test_node_in_wind_operates_the_nrel5mw_under_rosco(spawn, tmp_path):
     from std_msgs.msg import Float64MultiArray
     from hawt_msgs.msg import RotorState
     bag = tmp_path / "wind.mcap"
-    node, cli = spawn({"turbine": "nrel5mw", "wind": 15.0, "elements": 4, "step_deg": 1.0,
+    node, cli = spawn({"turbine": "nrel5mw", "wind": 15.0, "step_deg": 1.0,
                        "real_time_factor": 0.0, "publish_rate": 5.0,
                        "override_timeout": 3.0, "record": str(bag)})
     bd = cli.subscribe(BladeDeflection, "/blade_deflections")
