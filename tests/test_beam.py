@@ -265,6 +265,19 @@ def test_banerjee_exact_solution_matches_the_published_values():
     assert np.all(np.abs(ex / BAN_QUOTED - 1) < 1.5e-3), ex
 
 
+def banerjee_turbine():
+    """Banerjee's beam in hawt: mass centre offset 0.18 m along b2 (couples flap u3 and
+    torsion theta1), i1 about the mass centre = I_alpha - m x_alpha^2, lead-lag bending 1000x
+    stiffer, i2 = i3 = 1e-6."""
+    b = BAN
+    sec = SectionTable.uniform(mass=b["m"], i1=b["Ia"] - b["m"] * b["xa"] ** 2, i2=1e-6,
+                               i3=1e-6, gj=b["GJ"], ei2=b["EI"], ei3=1e3 * b["EI"])
+    sec = SectionTable(**{**{k: getattr(sec, k) for k in ("stations", "mass", "i1", "i2",
+                                                          "i3", "gj", "ei2", "ei3")},
+                          "cg_offset": [[b["xa"], 0.0], [b["xa"], 0.0]]})
+    return turbine(sec, length=b["L"])
+
+
 def test_coupled_bending_torsion_with_mass_offset():
     """Reference: the exact continuum frequencies of banerjee_exact().  hawt model: mass
     centre offset 0.18 m along b2 (couples flap u3 and torsion theta1), i1 about the mass
@@ -272,12 +285,7 @@ def test_coupled_bending_torsion_with_mass_offset():
     Tolerance: Richardson-extrapolated (N = 8, 16, 32) lowest six within 1e-4 relative,
     observed order 2 +- 0.3 for the first two."""
     b = BAN
-    sec = SectionTable.uniform(mass=b["m"], i1=b["Ia"] - b["m"] * b["xa"] ** 2, i2=1e-6,
-                               i3=1e-6, gj=b["GJ"], ei2=b["EI"], ei3=1e3 * b["EI"])
-    sec = SectionTable(**{**{k: getattr(sec, k) for k in ("stations", "mass", "i1", "i2",
-                                                          "i3", "gj", "ei2", "ei3")},
-                          "cg_offset": [[b["xa"], 0.0], [b["xa"], 0.0]]})
-    T = turbine(sec, length=b["L"])
+    T = banerjee_turbine()
     f = np.array([solve(T, N, count=12).frequencies()[:6] for N in MESHES])
     exact = banerjee_exact(**BAN)
     p, e = orders(f, exact)
@@ -310,13 +318,7 @@ def test_p_version_converges_at_order_2p_on_the_taper_and_the_coupled_beam(order
     p, _ = orders(f, exact)
     assert np.all(np.abs(p[0, 1:] - 2 * order) < 0.4), p
 
-    b = BAN
-    sec = SectionTable.uniform(mass=b["m"], i1=b["Ia"] - b["m"] * b["xa"] ** 2, i2=1e-6,
-                               i3=1e-6, gj=b["GJ"], ei2=b["EI"], ei3=1e3 * b["EI"])
-    sec = SectionTable(**{**{k: getattr(sec, k) for k in ("stations", "mass", "i1", "i2",
-                                                          "i3", "gj", "ei2", "ei3")},
-                          "cg_offset": [[b["xa"], 0.0], [b["xa"], 0.0]]})
-    T = _with_order(turbine(sec, length=b["L"]), order)
+    T = _with_order(banerjee_turbine(), order)
     exact = banerjee_exact(**BAN)
     f = np.array([solve(T, n, count=12).frequencies()[:6] for n in (2, 4, 8)])
     p, e = orders(f, exact)

@@ -98,7 +98,7 @@ class SpectralPointwiseJacobian(PointwiseBeamJacobian):
         (no rate); a state row its own Gauss point's states and every field and load of the
         element (its rates: its own states' and the fields').  Verified against the dense
         complex step in tests/test_spectral.py."""
-        p, Q, k, nn, nf, L = self.p, self.Q, self.k, self._nn, self._nf, self.local
+        Q, k, nn, nf, L = self.Q, self.k, self._nn, self._nf, self.local
         node = np.arange(nn) % 12
         eq_rows, kin_rows = np.r_[node < 6, np.zeros(nf + k * Q, bool)], \
             np.r_[node >= 6, np.zeros(nf + k * Q, bool)]
