@@ -165,6 +165,35 @@ def test_tracking_follows_permuted_and_missing_modes():
     assert not tracks[3].present()[2]
 
 
+def test_a_veering_pair_with_mixed_vectors_keeps_its_tracks():
+    """Reference: a synthetic veering (the assignment is known by construction).  Two modes
+    with orthonormal vectors a, b at the first speed; at the second each has turned
+    half-way towards a third direction of its own (c, d: motion the other mode never has),
+    so each matches its own past with MAC 0.45 and the other's with MAC 0 (exactly); the
+    frequencies move by 1 %.  Both must continue their tracks (two tracks, no new one): a
+    refusal threshold above 0.45 would split them into four."""
+    rng = np.random.default_rng(5)
+    Qm, _ = np.linalg.qr(rng.normal(size=(30, 4)) + 1j * rng.normal(size=(30, 4)))
+    a, b, c, d = Qm.T
+
+    def point(vectors, freqs):
+        return {"modes": [{"label": f"mode {j}", "family": "flap", "symmetry": "symmetric",
+                           "index": j + 1, "frequency_per_rev": f, "frequency_hz": f,
+                           "real_per_rev": 0.0, "damping_ratio": 0.0}
+                          for j, f in enumerate(freqs)],
+                "vectors": np.column_stack(vectors)}
+
+    w = np.sqrt(0.45)
+    turned = [w * a + np.sqrt(1 - w * w) * c, w * b + np.sqrt(1 - w * w) * d]
+    pts = [point([a, b], [1.0, 1.2]), point(turned, [1.01, 1.19])]
+    mac = abs(np.vdot(a, turned[0])) ** 2 / np.vdot(turned[0], turned[0]).real
+    assert mac == pytest.approx(0.45, abs=1e-12) and abs(np.vdot(b, turned[0])) < 1e-12
+    tracks = track_modes(pts)
+    assert [t.label for t in tracks] == ["mode 0", "mode 1"]
+    np.testing.assert_array_equal(tracks[0].frequency_hz, [1.0, 1.01])
+    np.testing.assert_array_equal(tracks[1].frequency_hz, [1.2, 1.19])
+
+
 def test_csv_header_and_row_count(processes, tmp_path):
     """Reference: one row per (speed, mode) = sum of the mode counts (exact), the header
     CSV_COLUMNS, speeds in rad/s and rpm (rpm = 60 w / 2 pi to 1e-9)."""

@@ -295,3 +295,39 @@ def test_three_blades_on_the_flexible_tower_file_fast_equals_full_period():
     assert [x[:3] for x in a] == [x[:3] for x in b]
     np.testing.assert_allclose([x[3:] for x in a], [x[3:] for x in b], atol=1e-7)
     assert a[0][0] == "yaw" and all(x[0] != "shear" for x in a)
+
+
+def test_a_cyclic_mode_below_one_per_rev_is_reported_positive_with_its_whirl_flipped():
+    """Reference: Coleman's transform of identical, uncoupled blades (a rigid hub on a
+    spinning shaft, yaw locked, no tower: each blade's root motion is prescribed).  A blade
+    mode at f_rot per-rev in the rotating frame appears in the fixed frame as a collective
+    mode at f_rot and a cyclic pair at f_rot + 1 (forward whirl) and f_rot - 1 (backward
+    whirl).  With the blade's first lag mode below 1 per-rev (EI3 / 100: f_rot = 0.82 from
+    the single clamped blade, hawt_core.blade_modes, an independent solver) the backward
+    member's fixed-frame frequency is negative: it is reported as |f_rot - 1| = 0.18 per-rev
+    with its whirl flipped to forward (its pattern turns with the rotor there, as a soft
+    in-plane rotor's regressing lag mode does), while its blade-to-blade phase stays the
+    rotating-frame pattern's: -360/Nb, opposite to the forward member's +360/Nb (the
+    collective: 0).  Frequencies to 1e-9 per-rev."""
+    T = rigid_hub_rotor(3, yaw_free=False)
+    sec = T.blade.sections
+    T = dc.replace(T, blade=dc.replace(T.blade, sections=dc.replace(sec, ei3=sec.ei3 * 0.01)))
+    f_rot = next(m.frequency_per_rev for m in blade_modes(T, 4).modes if m.family == "lag")
+    assert 0.5 < f_rot < 1.0
+    r = modal_analysis(T, elements=4, method="hill", max_per_rev=4)
+    lag = [m for m in r.modes if m.family == "lag"
+           and abs(m.frequency_per_rev - f_rot) < 1e-9]
+    by_fixed = {round(m.fixed_frame_per_rev, 6): m for m in lag}
+    assert len(lag) == 3, [(m.fixed_frame_per_rev, m.whirl) for m in lag]
+    low, mid, high = (by_fixed[round(f, 6)] for f in (1 - f_rot, f_rot, f_rot + 1))
+    assert low.fixed_frame_per_rev == pytest.approx(1 - f_rot, abs=1e-9)
+    assert high.fixed_frame_per_rev == pytest.approx(1 + f_rot, abs=1e-9)
+    assert (low.whirl, mid.whirl, high.whirl) == ("forward", "collective", "forward")
+    assert low.blade_phase_deg == pytest.approx(-120.0, abs=1e-6)
+    assert high.blade_phase_deg == pytest.approx(120.0, abs=1e-6)
+    assert mid.blade_phase_deg == pytest.approx(0.0, abs=1e-6)
+    # a cyclic pair above 1 per-rev keeps its backward member backward, with -360/Nb
+    bw = [m for m in r.modes if m.family == "lag" and m.whirl == "backward"]
+    assert bw and all(m.blade_phase_deg == pytest.approx(-120.0, abs=1e-6) for m in bw)
+    assert all(m.fixed_frame_per_rev == pytest.approx(m.frequency_per_rev - 1, abs=1e-9)
+               for m in bw)

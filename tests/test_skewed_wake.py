@@ -26,15 +26,18 @@ import pytest
 from hawt_core.aero.inflow import skew_angles, skewed_wake_factor
 from hawt_core.aero.wind import Wind
 from hawt_core.assembly import TurbineModel
-from hawt_core.model import PITT_PETERS_SKEW
 
 from test_turbine_aero import _captured_relative_wind, teetering_rotor
 
 ELEMENTS = 3
 INDUCTION = 0.3
 
+#: Pitt and Peters' constant as AeroDyn v15 states its default (SkewRedistrFactor "default" =
+#: 15 pi / 32, "recommended by R. R. Damiani"; AeroDyn v15 input documentation), written here
+#: so that the model's own constant (model.AERODYN_SKEW) is checked, not copied
+AERODYN_SKEW = 15.0 * np.pi / 32.0
 
-def _model(turbine, direction_deg, skew=PITT_PETERS_SKEW):
+def _model(turbine, direction_deg, skew=AERODYN_SKEW):
     """The teetering rotor in 8 m/s wind at ``direction_deg`` with the frozen induction 0.3
     everywhere (no swirl) and the skewed-wake constant ``skew``."""
     aero = replace(turbine.aerodynamics, skew_factor=skew)
@@ -63,7 +66,7 @@ def test_the_induction_is_redistributed_over_the_yawed_disk_as_pitt_and_peters_s
     ratio = (e + x) / (e + L)
     U = 8.0
     chi = (1 + 0.6 * INDUCTION) * gamma
-    corr = PITT_PETERS_SKEW * ratio * np.tan(chi / 2)
+    corr = AERODYN_SKEW * ratio * np.tan(chi / 2)
     W = _captured_relative_wind(model, y, 0.5 * np.pi / omega)
     un = U * np.cos(gamma)
     assert np.allclose(W[:, :, 0, 2], un * (1 - INDUCTION * (1 - corr)), rtol=1e-12, atol=0)
@@ -91,16 +94,16 @@ def test_the_downwind_blade_loses_thrust_and_the_rotor_yaws_back_into_the_wind()
     t = teetering_rotor()
     tq = 0.5 * np.pi / t.rotor.speed
     thrust = {}
-    for k in (0.0, PITT_PETERS_SKEW, 2 * PITT_PETERS_SKEW):
+    for k in (0.0, AERODYN_SKEW, 2 * AERODYN_SKEW):
         model = _model(t, 15.0, skew=k)
         force, _ = model.aero_loads(model.initial_guess(), tq)
         thrust[k] = force[:, 2]                          # along b3 = s3 (no precone)
     assert abs(thrust[0.0][0] - thrust[0.0][1]) <= 1e-12 * abs(thrust[0.0][0])
-    upwind, downwind = thrust[PITT_PETERS_SKEW]
+    upwind, downwind = thrust[AERODYN_SKEW]
     assert upwind > downwind > 0
     # blade 0 at +n2 (upwind), blade 1 at -n2: yaw moment n1 . sum(r x T s3) ~ T0 - T1 > 0
     assert upwind - downwind > 1e-2 * upwind
-    doubled = thrust[2 * PITT_PETERS_SKEW]
+    doubled = thrust[2 * AERODYN_SKEW]
     assert (doubled[0] - doubled[1]) / (upwind - downwind) == pytest.approx(2.0, rel=2e-2)
 
 
@@ -125,7 +128,7 @@ def test_axial_flow_is_an_ordinary_point_of_the_residual_and_its_jacobian():
     assert np.abs(fd - column).max() <= 1e-6 * np.abs(column).max()
     s3 = np.array([0.0, 0.0, 1.0])
     along, sin2 = skew_angles(np.array([0.0, 0.0, 8.0]), s3)
-    assert skewed_wake_factor(along, sin2, 0.3, 0.7, PITT_PETERS_SKEW) == 1.0
+    assert skewed_wake_factor(along, sin2, 0.3, 0.7, AERODYN_SKEW) == 1.0
     g = np.radians(10.0)
     psi = np.radians(35.0)
     s3 = np.array([np.sin(0.05), 0.0, np.cos(0.05)])            # precone-like b1 . s3
@@ -135,8 +138,8 @@ def test_axial_flow_is_an_ordinary_point_of_the_residual_and_its_jacobian():
     wind = 8.0 * (np.cos(g) * s3 + np.sin(g) * (np.cos(psi) * b1p + np.sin(psi) * side))
     along, sin2 = skew_angles(wind, s3)
     chi = 1.18 * g
-    plain = 1 + PITT_PETERS_SKEW * 0.7 * np.tan(chi / 2) * np.cos(psi)
-    assert skewed_wake_factor(along, sin2, 0.3, 0.7, PITT_PETERS_SKEW) == pytest.approx(
+    plain = 1 + AERODYN_SKEW * 0.7 * np.tan(chi / 2) * np.cos(psi)
+    assert skewed_wake_factor(along, sin2, 0.3, 0.7, AERODYN_SKEW) == pytest.approx(
         plain, rel=1e-13)
 
 
@@ -152,8 +155,8 @@ def test_the_constant_comes_from_the_turbine_file_and_the_aerodynamic_deck(tmp_p
     from test_real_turbines import NREL, _edit, needs_decks, quiet_load
 
     t = teetering_rotor()
-    assert t.aerodynamics.skew_factor == PITT_PETERS_SKEW
-    assert quiet_load("nrel5mw").aerodynamics.skew_factor == PITT_PETERS_SKEW
+    assert t.aerodynamics.skew_factor == AERODYN_SKEW
+    assert quiet_load("nrel5mw").aerodynamics.skew_factor == AERODYN_SKEW
     d = yaml.safe_load(dump_turbine(replace(t, aerodynamics=replace(t.aerodynamics,
                                                                      skew_factor=0.5))))
     assert d["aerodynamics"]["skew_factor"] == 0.5
@@ -164,7 +167,7 @@ def test_the_constant_comes_from_the_turbine_file_and_the_aerodynamic_deck(tmp_p
     if needs_decks.args[0]:                      # no rosco wheel: the file part only
         return
     from hawt_core.io.openfast import read_openfast
-    assert read_openfast(NREL).turbine.aerodynamics.skew_factor == PITT_PETERS_SKEW
+    assert read_openfast(NREL).turbine.aerodynamics.skew_factor == AERODYN_SKEW
     for key, value, expected in (("Skew_Mod", "0", 0.0), ("SkewRedistrFactor", "1.2", 1.2)):
         deck = tmp_path / key
         shutil.copytree(NREL.parent, deck)

@@ -192,3 +192,50 @@ def test_tower_drag_needs_the_table_and_a_flexible_tower():
     assert "tower drag" in described and "Pitt-Peters skewed wake" in described
     assert TurbineModel(replace(t, tower=None), elements=2,
                         wind=Wind(8.0)).tower_drag is None
+
+
+def test_the_drag_of_a_round_tower_does_not_depend_on_the_wind_direction():
+    """Reference: a circular cylinder in cross-flow: f = 1/2 rho C_d D |W_perp| W_perp with
+    W_perp the flow normal to its axis, whatever its direction in that plane (no preferred
+    axis) and whatever the flow along the axis.  At wind directions 0, 30, 90 and 200 deg
+    about the tower axis the force per length has the magnitude 1/2 rho C_d D U^2 and the
+    wind's direction (1e-12); a section tilted 10 deg (theta about b2) sees a flow component
+    along its axis that adds no force along it and only W_perp's magnitude (1e-12).  A
+    drag written with one component's magnitude (|W3| for |W_perp|) fails the 30 and 90 deg
+    cases."""
+    t = upright(nrel5mw())
+    ta = t.tower_aerodynamics
+    H = t.tower.length
+    z = ta.stations * H
+    model = TurbineModel(t, elements=4, wind=Wind(15.0))
+    for deg in (0.0, 30.0, 90.0, 200.0):
+        wind = Wind(15.0, direction=np.radians(deg))
+        model.tower_drag.set_wind(wind)           # the tower's drag alone, in that wind
+        beam = model.tower
+        N, G = beam.xg.shape
+        pos = np.zeros((N, G, 1, 3))
+        pos[..., 0, 0] = beam.xg
+        coef = 0.5 * RHO * np.interp(beam.xg, z, ta.drag) * np.interp(beam.xg, z, ta.diameter)
+        zero = np.zeros((N, G, 1, 3))
+        for tilt in (0.0, np.radians(10.0)):
+            theta = zero.copy()
+            theta[..., 0, 1] = 2 * np.tan(tilt / 2)      # Rodrigues parameters
+            f, m = model.tower_drag.section_loads(np.zeros(1))(
+                {"V": zero, "theta": theta, "position": pos})
+            assert np.all(f[..., 0, 0] == 0) and np.all(m == 0)
+            if tilt == 0.0:
+                assert np.allclose(np.linalg.norm(f[..., 0, :], axis=-1), coef * 15.0 ** 2,
+                                   rtol=1e-12, atol=0), deg
+                U = wind.velocity(np.zeros((N, G)), pos[..., 0, :] - [H, 0.0, 0.0])
+                cosine = np.sum(f[..., 0, :] * U, -1) / (np.linalg.norm(f[..., 0, :], axis=-1)
+                                                         * np.linalg.norm(U, axis=-1))
+                assert np.allclose(cosine, 1.0, rtol=0, atol=1e-12), deg
+            else:
+                # the flow in the tilted section's frame, by the rotation written here
+                c, s = np.cos(tilt), np.sin(tilt)
+                R2 = np.array([[c, 0, -s], [0, 1, 0], [s, 0, c]])    # frame turned about b2
+                U = wind.velocity(np.zeros((N, G)), pos[..., 0, :] - [H, 0.0, 0.0])
+                Ws = U @ R2.T
+                perp = np.linalg.norm(Ws[..., 1:], axis=-1)
+                assert np.allclose(np.linalg.norm(f[..., 0, :], axis=-1), coef * perp ** 2,
+                                   rtol=1e-12, atol=0), deg
