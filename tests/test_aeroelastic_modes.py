@@ -198,3 +198,33 @@ def test_simulate_command_in_wind(tmp_path, capsys):
     out = json.loads(capsys.readouterr().out)
     assert abs(out["final"]["teeter"]) < 1e-8
     assert out["simulated_seconds"] == pytest.approx(0.5, abs=0.05)
+
+
+def test_heavily_damped_flap_modes_of_a_large_rotor_are_found():
+    """The IEA 15-MW (shipped file, converged mesh) at ROSCO's 8 m/s point with the frozen
+    wake: its first flap modes are damped by the air so much (damping ratios 0.77-0.88)
+    that their real parts, 5 to 6 per-rev, lie outside the |Re| <= 1 per-rev strip Hill's
+    windows search; before, no flap mode at all came out below 25 per-rev (issue 34).  The
+    modal-basis stage now follows every oscillatory averaged mode of the band whatever its
+    damping.  Reference: a rotor of three blades has, for each blade mode, a backward-whirl,
+    a collective and a forward-whirl member (Coleman): all three of the first flap are there,
+    with fixed-frame frequencies in the order BW < collective < FW, heavily damped
+    (zeta > 0.5), and the analysis stays fast (the reduction's error estimate for these
+    modes, up to 1.6e-4, is accepted at HEAVY_TOL = 1e-3 instead of refining them on the
+    whole Hill pencil: the refinement moved them by 1e-6 relative, at 14 times the cost)."""
+    import warnings
+    from hawt_core.analyses.operating_points import at_operating_point
+    from hawt_core.io.catalog import load_any, shipped_controller
+    from hawt_core.io.discon import discon_schedule
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        t = load_any("iea15mw")
+    at, _ = at_operating_point(t, 8.0, discon_schedule(shipped_controller("iea15mw")))
+    r = modal_analysis(at, wind=Wind(8.0), max_per_rev=25)
+    flap1 = {m.whirl: m for m in r.modes if m.family == "flap" and m.fixed_frame_per_rev < 5}
+    assert set(flap1) == {"backward", "collective", "forward"}, \
+        [(m.label, m.fixed_frame_per_rev) for m in r.modes]
+    bw, co, fw = flap1["backward"], flap1["collective"], flap1["forward"]
+    assert bw.fixed_frame_per_rev < co.fixed_frame_per_rev < fw.fixed_frame_per_rev
+    assert all(m.damping_ratio > 0.5 for m in flap1.values())
+    assert r.settings["hill_relative_change"] <= 1e-3

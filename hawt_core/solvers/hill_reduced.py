@@ -232,8 +232,12 @@ def reduced_converged_modes(mats: dict, n: int, w: float, band: float, obs, wts,
     eps = 1e-9 * band
     # candidates: the averaged exponents in the band (and half a base frequency beyond it,
     # where the coupling may bring them in)
+    # (and the heavily damped oscillatory ones, |Re| up to the band: aerodynamically damped
+    # flap modes; not the real exponents of the aerodynamic states' lags, of which every
+    # Gauss point has its own)
     targets = np.flatnonzero((mu.imag >= -eps) & (mu.imag <= band + 0.5 * w)
-                             & (np.abs(mu.real) <= 1.5 * w))
+                             & ((np.abs(mu.real) <= 1.5 * w)
+                                | ((np.abs(mu.real) <= band) & (mu.imag > 0.05 * w))))
     eta = mu[targets].copy()
     H_cap = min(max_harmonics, (MAX_REDUCED_SIZE // max(mu.size, 1) - 1) // 2)
     for H in range(1, H_cap + 1):
@@ -276,7 +280,7 @@ def reduced_converged_modes(mats: dict, n: int, w: float, band: float, obs, wts,
                 shifted[-m:] = p[:L + m]
             p = shifted
             energy = np.einsum("r,kr->k", wts, np.abs(p[:, obs]) ** 2)
-        if not (-eps <= e.imag <= band and abs(e.real) <= w):
+        if not (-eps <= e.imag <= band and abs(e.real) <= max(w, band)):
             continue
         if any(abs(e - o) <= 1e-9 * w for o in lam):
             raise ReductionFailed("two averaged modes continue into copies of one exponent")
