@@ -123,6 +123,13 @@ class SectionTable:
         return cls(**out)
 
 
+def order_text(order) -> str:
+    """" of order p" for elements of the p-version (order > 1; None or 0: 1), "" for the
+    paper's element: what messages and tables append to an element count."""
+    p = int(order or 1)
+    return f" of order {p}" if p > 1 else ""
+
+
 @dataclass(frozen=True, eq=False)
 class Beam:
     """A flexible beam: length [m], section table and number of finite elements.
@@ -150,8 +157,7 @@ class Beam:
         """"3 elements of order 6" or "4 elements" (the paper's element): the mesh of
         ``elements`` (default this beam's) elements of this beam's order, for messages."""
         n = int(elements or self.elements)
-        return f"{n} element{'s' if n != 1 else ''}" + \
-            (f" of order {int(self.order)}" if int(self.order) > 1 else "")
+        return f"{n} element{'s' if n != 1 else ''}{order_text(self.order)}"
 
 
 @dataclass(frozen=True)

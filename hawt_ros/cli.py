@@ -79,7 +79,7 @@ def modes_to_json(response) -> Dict[str, Any]:
     s = response.settings
     return {
         "settings": {"turbine": s.turbine, "elements": int(s.elements),
-                     "order": int(getattr(s, "order", 1) or 1),
+                     "order": int(s.order or 1),
                      "rotor_speed": float(s.rotor_speed), "method": s.method,
                      "steps": int(s.steps)},
         "modes": [{"family": m.family, "symmetry": m.symmetry or None, "index": int(m.index),
@@ -99,13 +99,12 @@ def modes_to_json(response) -> Dict[str, Any]:
 
 def format_modes_table(response) -> str:
     """The modes of a response as a table like ``hawt modes`` prints."""
+    from hawt_core.model import order_text
     from hawt_core.results.tables import format_table
     st = response.settings
     header = (f"Dominant frequencies of the turbine '{st.turbine}' (Floquet, {st.method}, "
-              f"{st.steps} steps/period), {st.elements} elements"
-              + (f" of order {st.order}" if int(getattr(st, "order", 1) or 1) > 1 else "")
-              + " per blade, rotor speed "
-              f"{st.rotor_speed:.4g} rad/s")
+              f"{st.steps} steps/period), {st.elements} elements{order_text(st.order)} per "
+              f"blade, rotor speed {st.rotor_speed:.4g} rad/s")
     return format_table(header, response.modes,
                         [f"{response.message}; computed in {response.compute_time:.2f} s"])
 

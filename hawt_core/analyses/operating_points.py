@@ -116,7 +116,7 @@ def operating_points(turbine, wind_speeds, schedule: dict, elements: Optional[in
             progress((i + 1) / winds.size, f"{U:.3g} m/s")
     return OperatingPoints(turbine=turbine.name, points=points, schedule=s,
                            settings={"elements": n_el,
-                                     "order": int(getattr(turbine.blade, "order", 1)),
+                                     "order": int(turbine.blade.order),
                                      "density": rho,
                                      "model": "one blade per blade on the spinning hub, BEM "
                                               "(Prandtl, Buhl) at the Gauss points, axial wind"})

@@ -188,7 +188,7 @@ def with_accuracy(args, turbine, analysis, progress=None, scope="the modes print
     reports (``scope`` names them in messages)."""
     from ..analyses.accuracy import converge, with_error_estimates
     n0 = int(args.elements or turbine.blade.elements)
-    order = int(getattr(turbine.blade, "order", 1))
+    order = int(turbine.blade.order)
     run = refined_runner(turbine, n0, analysis)
     if args.accuracy is not None:
         return converge(run, n0, args.accuracy, progress, scope=scope, order=order)

@@ -20,7 +20,7 @@ def beam_elements(beam: Beam, elements: Optional[int] = None, pitch: float = 0.0
     """The discretized operator of ``beam`` (model.Beam) with ``elements`` elements
     (default ``beam.elements``) of its ``order``, turned by ``pitch`` [rad] about b1."""
     n = int(beam.elements if elements is None else elements)
-    order = int(getattr(beam, "order", 1))
+    order = int(beam.order)
     if order == 1:
         return BeamElements(mesh_beam(beam, n, pitch=pitch), gauss)
     return SpectralBeamElements(beam, n, order, pitch=pitch, gauss=gauss)

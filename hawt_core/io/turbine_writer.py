@@ -81,7 +81,7 @@ def _aero_dict(a) -> dict:
 
 def _beam_dict(b: Beam) -> dict:
     out = {"length": float(b.length), "elements": int(b.elements)}
-    if int(getattr(b, "order", 1)) != 1:
+    if int(b.order) != 1:
         out["order"] = int(b.order)
     if b.tip_mass:
         out["tip_mass"] = float(b.tip_mass)

@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Optional
 
 import numpy as np
 
+from ..model import order_text
 from .tables import error_cell, error_note, format_table
 
 if TYPE_CHECKING:
@@ -27,8 +28,7 @@ VACUUM_NOTE = ("in a vacuum: the turbine's aerodynamics (blade and airfoil polar
 
 def _of_order(settings: dict) -> str:
     """" of order p" for the p-version's elements (settings["order"] > 1), else ""."""
-    order = int(settings.get("order", 1) or 1)
-    return f" of order {order}" if order > 1 else ""
+    return order_text(settings.get("order"))
 
 
 @dataclass

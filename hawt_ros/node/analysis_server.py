@@ -48,7 +48,7 @@ class AnalysisServer:
                                                      else self.omega)))
         s.elements = int(rs.get("elements", (req.elements if req and req.elements
                                              else self._analysis_elements)))
-        s.order = int(rs.get("order", getattr(self.turbine.blade, "order", 1)))
+        s.order = int(rs.get("order", self.turbine.blade.order))
         steps = rs.get("steps", req.steps if req else None)
         if steps is None:
             try:

@@ -25,7 +25,7 @@ class Recording:
         s = self.settings
         settings = {"node": self.get_fully_qualified_name(), "turbine": self.turbine_path,
                     "elements": self.model.beam.elements,
-                    "order": int(getattr(self.turbine.blade, "order", 1)), "step_deg": s.step_deg,
+                    "order": int(self.turbine.blade.order), "step_deg": s.step_deg,
                     "publish_rate": s.publish_rate, "real_time_factor": s.real_time_factor,
                     "perturb": dict(s.perturb), "marker_frame": s.marker_frame,
                     "simulation": self.sim_source, "wind": s.wind,
