@@ -130,6 +130,58 @@ def order_text(order) -> str:
     return f" of order {p}" if p > 1 else ""
 
 
+#: Mode families a beam's modal damping ratios name, per bending plane: the bending
+#: strain they damp (index into [gamma1, gamma2, gamma3, kappa1, kappa2, kappa3]).
+MODAL_FAMILIES = {"flap": 4, "edge": 5, "fore_aft": 4, "side_side": 5}
+
+
+@dataclass(frozen=True)
+class BeamDamping:
+    """Structural damping of a beam (a property of the material, so of the model).
+
+    Two viscous forms, summed (Rayleigh damping of a beam, in the section frame of the
+    file's matrices; docs/structural_damping.md):
+
+    - ``stiffness`` (6,) [s]: mu per section strain [gamma1, gamma2, gamma3, kappa1,
+      kappa2, kappa3], the section loads' viscous part ``[F, M]_d = diag(mu) S
+      d[gamma, kappa]/dt`` (Kelvin-Voigt; BeamDyn's ``mu``, HAWC2's ``damping_posdef``
+      k-terms).  In a clamped beam whose mu is the same for every strain this gives every
+      mode ``zeta = mu omega / 2``.
+    - ``mass`` (6,) [1/s]: alpha per section velocity component [v1, v2, v3, omega1,
+      omega2, omega3], a distributed load ``-diag(alpha) mu_s (the section's velocity
+      relative to the beam's root frame)`` (HAWC2's m-terms): ``zeta = alpha / (2 omega)``.
+    - ``modal``: damping ratios [-] (fractions, not %) of the clamped, non-rotating beam's
+      modes by family, e.g. ``{"flap": (0.0048, 0.0048), "edge": (0.0048,)}`` (ElastoDyn's
+      BldFlDmp, BldEdDmp; a tower's ``fore_aft``, ``side_side``: TwrFADmp, TwrSSDmp).  The
+      discretization turns them into the two forms above (fem/damping.py): with one ratio a
+      family gets ``mu`` on its bending strain (ElastoDyn's own rule, 2 zeta / omega), with
+      two also ``alpha`` on its bending plane's velocities, so that the bare beam's (no tip
+      mass) first modes of the family have exactly these ratios.
+    """
+
+    stiffness: tuple = (0.0,) * 6
+    mass: tuple = (0.0,) * 6
+    modal: Optional[dict] = None
+
+    @property
+    def enabled(self) -> bool:
+        """Whether any damping is given."""
+        return bool(any(self.stiffness) or any(self.mass) or self.modal)
+
+    def text(self) -> str:
+        """One line for tables and logs: what the damping is."""
+        if self.modal:
+            return "modal " + ", ".join(
+                f"{k} " + "/".join(f"{100 * z:.4g}" for z in v) + " %"
+                for k, v in self.modal.items())
+        parts = []
+        if any(self.stiffness):
+            parts.append("mu " + " ".join(f"{v:.3g}" for v in self.stiffness) + " s")
+        if any(self.mass):
+            parts.append("alpha " + " ".join(f"{v:.3g}" for v in self.mass) + " 1/s")
+        return "; ".join(parts) or "none"
+
+
 @dataclass(frozen=True, eq=False)
 class Beam:
     """A flexible beam: length [m], section table and number of finite elements.
@@ -144,6 +196,8 @@ class Beam:
     properties; second order in the element count); 2 and more the p-version of the same
     formulation (fem/spectral.py: degree-p fields, the properties integrated exactly
     between the file's stations; its error falls like h^(2p) on smooth modes).
+
+    ``damping``: the beam's structural damping (BeamDamping) or None (undamped).
     """
 
     length: float
@@ -152,6 +206,7 @@ class Beam:
     tip_mass: float = 0.0
     tip_inertia: tuple = (0.0, 0.0, 0.0)
     order: int = 1
+    damping: Optional[BeamDamping] = None
 
     def mesh_text(self, elements=None) -> str:
         """"3 elements of order 6" or "4 elements" (the paper's element): the mesh of
@@ -370,6 +425,20 @@ class Turbine:
 
     def with_elements(self, n: int) -> "Turbine":
         return replace(self, blade=replace(self.blade, elements=int(n)))
+
+    def structural_damping_text(self) -> str:
+        """What structural damping the beams carry, for tables' headers and logs:
+        "structural damping: blade modal flap 0.4775/0.4775 %, edge 0.4775 %; tower ...",
+        or "" for an undamped structure (the paper's turbine: its tables unchanged)."""
+        parts = [f"{name} {beam.damping.text()}"
+                 for name, beam in (("blade", self.blade), ("tower", self.tower))
+                 if beam is not None and beam.damping is not None and beam.damping.enabled]
+        return ("structural damping: " + "; ".join(parts)) if parts else ""
+
+    def without_structural_damping(self) -> "Turbine":
+        """This turbine with undamped blades and tower (a conservative structure)."""
+        return replace(self, blade=replace(self.blade, damping=None),
+                       tower=None if self.tower is None else replace(self.tower, damping=None))
 
     def distance_from_shaft(self, x) -> np.ndarray:
         """Distance [m] from the shaft axis of the points at span ``x`` [m] of the undeformed

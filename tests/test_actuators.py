@@ -62,8 +62,10 @@ def test_pitch_bearing_turns_the_blade_as_a_pitched_mesh():
     at 4 deg has the same shaft twist (rotor torque) within 1e-9, the same tip displacement
     (turned into the same frame) within 1e-9 m, and the same eigenvalues within 1e-5
     (relative; the three blades' repeated eigenvalues split by round-off at ~1e-7); without
-    the bearings they differ by more than 1e-2."""
-    t = axisymmetric(nrel5mw())
+    the bearings they differ by more than 1e-2.  Undamped structure: the dense QZ of a
+    pencil with structural damping (the section loads' rates) carries ~1e-5 noise on the
+    high modes compared here (docs/structural_damping.md)."""
+    t = axisymmetric(nrel5mw()).without_structural_damping()
     p = np.radians(4.0)
     pitched = TurbineModel(replace(t, rotor=replace(t.rotor, pitch=-p)), elements=4,
                            wind=Wind(11.0))

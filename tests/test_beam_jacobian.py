@@ -67,6 +67,31 @@ def _case(beam, k, rng):
     return fun
 
 
+def pointwise_against_dense(beam, pw, fun, states, rng):
+    """Compare ``pw``'s dR/dy and dR/dydot of ``fun`` (from :func:`_case`) at a random state
+    with the dense complex step of the whole residual (1e-12 of the largest entry); returns
+    the dense references (dR/dy, dR/dydot)."""
+    y = rng.normal(size=pw.n) * 0.3
+    yd = rng.normal(size=pw.n)
+    D = pw.directions
+    refs = []
+    for rates in (False, True):
+        cap = {}
+        if rates:
+            r = fun(yd[None] + 1j * STEP * pw.seeds, np.tile(y, (D, 1)), cap)
+            ref = dense_complex_step(lambda z: fun(z, y)[0], yd)
+        else:
+            r = fun(np.tile(yd, (D, 1)), y[None] + 1j * STEP * pw.seeds, cap)
+            ref = dense_complex_step(lambda z: fun(yd, z)[0], y)
+        rows, cols, vals = pw.values(cap, r[:, beam.n:] if states else None, STEP, 1,
+                                     rates=rates)
+        J = np.zeros((pw.n, pw.n))
+        np.add.at(J, (rows, cols), vals[0])
+        assert np.abs(J - ref).max() <= 1e-12 * np.abs(ref).max(), rates
+        refs.append(ref)
+    return refs
+
+
 def _check(k):
     rng = np.random.default_rng(11 + k)
     beam = every_term_beam(4)

@@ -59,19 +59,24 @@ def test_free_generator_torque_equals_the_held_shaft_torque():
         check_equilibrium_exists(free)
 
 
-def test_free_generator_in_wind_refused_before_any_newton(monkeypatch):
+def test_free_generator_in_wind_with_its_own_controls_refused_before_any_newton(monkeypatch):
     """The shipped NREL 5-MW (flexible tower, gravity, tilt, yaw bearing with its spring)
-    with the generator free, as ElastoDyn's GenDOF = True without a torque: the modal
-    analysis refuses before the harmonic balance or any Newton solve runs (it searched 3.5
-    min before), naming the field, the torque and the remedy, and no free-yaw advice."""
-    from hawt_core.analyses.modal import modal_analysis
+    with the generator free and controls of its own holding no torque (a closed loop whose
+    controller gives none; without controls the steady state trims the torque instead:
+    tests/test_generator_trim.py): the periodic steady state refuses before the harmonic
+    balance or any Newton solve runs, naming the field, the torque and the remedy, and no
+    free-yaw advice."""
+    from hawt_core.rigid.actuators import ControlInputs
+    from hawt_core.solvers.periodic import periodic_steady_state
 
     def forbidden(*a, **k):
         raise AssertionError("a steady-state solve ran before the equilibrium check")
     monkeypatch.setattr(periodic_module, "_harmonic_balance", forbidden)
     monkeypatch.setattr(periodic_module, "constant_steady_state", forbidden)
+    model = TurbineModel(nrel5mw(), elements=8, rotor_speed=RPM9, wind=Wind(8.0))
+    model.set_controls(ControlInputs(3, pitch=-float(model.turbine.rotor.pitch), torque=0.0))
     with pytest.raises(NoEquilibrium) as ei:
-        modal_analysis(nrel5mw(), elements=8, rotor_speed=RPM9, wind=Wind(8.0))
+        periodic_steady_state(model)
     msg = str(ei.value)
     for words in ("drivetrain.generator", "kN m", "at 9 rpm in 8 m/s wind", "prescribed",
                   "GenDOF"):

@@ -74,7 +74,10 @@ def _blade_modes(turbine, elements, rotor_speed, count, method, band_factor, max
         lam, X = sparse_modes(-Jy, Jd, k, band=band)
     else:
         lam, X = finite_modes(-Jy.toarray(), Jd.toarray(), band)
-    order = np.lexsort((lam.real, np.abs(lam.imag)))
+    # oscillatory modes by frequency, then the real exponents (the overdamped branch of
+    # structural damping, near -1/mu) by decay rate, so that "1st flap" is a vibration
+    real = np.abs(lam.imag) <= 1e-3 * np.abs(lam)
+    order = np.lexsort((lam.real, np.abs(lam.imag), np.abs(lam.real) * real, real))
     if count is not None:
         order = order[:count]
     if max_hz is not None:
@@ -94,6 +97,7 @@ def _blade_modes(turbine, elements, rotor_speed, count, method, band_factor, max
                           eigenvalue=complex(lam[j]), shape=mode_shape(model.beam, x)))
     settings = {"turbine": turbine.name, "elements": model.beam.elements,
                 "order": model.beam.order, "rotor_speed": om,
+                "structural_damping": turbine.structural_damping_text(),
                 "hub_radius": float(turbine.hub.radius), "method": method,
                 "count": count, "max_hz": max_hz, "unknowns": model.n,
                 "in_vacuum": turbine.aerodynamics is not None}

@@ -455,12 +455,16 @@ def _modal_analysis(turbine, elements, rotor_speed, steps, method, fast, harmoni
     number_modes(modes)
     settings = {"turbine": turbine.name, "elements": model.beam.elements,
                 "order": model.beam.order, "rotor_speed": omega,
+                "structural_damping": turbine.structural_damping_text(),
                 "in_vacuum": wind is None and turbine.aerodynamics is not None,
                 "method": "standstill" if standstill else method, "steps": steps,
                 "fast": bool(use_fast),
                 "blades": model.n_blades, "resolution_per_rev": limit,
                 "steady_state": "constant" if steady.constant
                 else f"periodic ({harmonics} harmonics)", **extra}
+    if getattr(model, "trimmed_torque", None) is not None:
+        # a free generator held by the torque the steady state trimmed (solvers/trim.py)
+        settings["generator_torque"] = float(model.trimmed_torque)
     if wind is not None:
         a, ap = model.aero.inductions
         settings.update({"wind_speed": float(wind.speed),

@@ -40,9 +40,12 @@ frame components, so the coupling to the hub is unchanged, and a straight beam
 """
 from __future__ import annotations
 
+from typing import Optional
+
 import numpy as np
 
 from ..numerics.rotations import LEVI_CIVITA_9, cross as cross3, dot, rot_apply
+from .damping import DampingCoefficients, section_operators
 from .sections import ElementProperties
 
 #: Offsets inside the per-element block of 18 unknowns.
@@ -91,6 +94,13 @@ class CellLayout:
         blk = d[ROOT_SIZE:].reshape(self.N, BLOCK_SIZE)
         blk[:, U_] = blk[:, TH_] = blk[:, V_] = blk[:, OM_] = True
         return d
+
+    def _mark_rate_loads(self, cells: np.ndarray):
+        """Mark the section loads whose rates the residual reads (structural damping:
+        ``cells`` (N, 6) per cell's [F, M]) as differential unknowns."""
+        blk = self.differential[ROOT_SIZE:].reshape(self.N, BLOCK_SIZE)
+        blk[:, F_] |= cells[:, 0:3]
+        blk[:, M_] |= cells[:, 3:6]
 
     def split(self, y):
         """Views of a (B, n) array: root (B,12) and element blocks (B,N,18)."""
@@ -155,7 +165,8 @@ class BeamElements(CellLayout):
     #: rather than one small matmul per product (fewer NumPy calls)
     BIG = 64
 
-    def __init__(self, props: ElementProperties, gauss: int = 3):
+    def __init__(self, props: ElementProperties, gauss: int = 3,
+                 damping: Optional[DampingCoefficients] = None):
         self.props = props
         self.N = props.n_elements
         self.n = ROOT_SIZE + BLOCK_SIZE * self.N
@@ -191,7 +202,18 @@ class BeamElements(CellLayout):
         J = np.diag(np.asarray(props.tip_inertia, float))
         self.tip_inertia = frames[-1] @ J @ frames[-1].T
         self._has_tip_body = self.tip_mass != 0 or np.any(J != 0)
+        # structural damping (fem/damping.py), per element: the viscous section loads
+        # mu_hat dF/dt and the mass-proportional load's operator (transposed)
+        self.damping = damping
+        mu_hat, alpha_mu = section_operators(damping, props.compliance, mu,
+                                             A6 if props.curved else None)
+        self._muhatT = None if mu_hat is None else np.ascontiguousarray(
+            mu_hat.transpose(0, 2, 1))
+        self._amuT = None if alpha_mu is None else np.ascontiguousarray(
+            alpha_mu.transpose(0, 2, 1))[:, None]
         self.differential = self._differential_mask()
+        if mu_hat is not None:
+            self._mark_rate_loads(np.any(mu_hat != 0, axis=1))
         self._precompute()
 
     # ------------------------------------------------------------------ residual
@@ -313,18 +335,22 @@ class BeamElements(CellLayout):
         airy = wind is not None
         several = airy and np.ndim(wind) == 3
         m_wind = (np.shape(wind)[1] if several else 1) if airy else 0
-        nT = 3 + grav + m_wind
+        viscous = self._amuT is not None
+        wxp = cross(w[:, :, None], (ug + self._X0)[..., None, :], (N, G, B, 3))
+        nT = 3 + grav + viscous + m_wind
         T = np.empty((N, G, B, nT, 3), dtype=dt)
         T[..., 0, :] = Vg
         T[..., 1, :] = e1g[:, None]
         T[..., 2, :] = w
         if grav:
             T[..., 3, :] = g
+        if viscous:            # the root frame's velocity at the section: C (v + w x p)
+            T[..., 3 + grav, :] = wxp + v
         if airy:
             T[..., nT - m_wind:, :] = wind if several else wind[:, None, :]
         sgn = self._sgn4 if grav else self._sgn3
-        if airy:
-            sgn = np.concatenate([sgn, -np.ones((m_wind, 1))])
+        if viscous or airy:
+            sgn = np.concatenate([sgn, -np.ones((viscous + m_wind, 1))])
         rT, th1 = turn_stacked(thg, T, sgn, cross)              # th1 (N, G, B, 1, 3)
         # Q [Om - C w, kap]
         T2 = np.empty((N, G, B, 2, 3), dtype=dt)
@@ -342,6 +368,11 @@ class BeamElements(CellLayout):
             gB = rT[..., 3, :]
             t[..., 0:3] -= self._mpl * gB
             t[..., 3:6] -= cross(self._mxi4, gB[..., None, :], gB.shape)
+        if viscous:            # mass-proportional damping of the relative velocities
+            rel = np.empty((N, G, B, 6), dtype=dt)
+            np.subtract(Vg, rT[..., 3 + grav, :], out=rel[..., 0:3])
+            rel[..., 3:6] = T2[..., 0, :]
+            t += rel @ self._amuT
         if section_loads is not None:
             force, moment = section_loads({
                 "V": Vg, "Omega": Omg, "Vdot": a[..., 18:21], "Omegadot": a[..., 21:24],
@@ -351,7 +382,6 @@ class BeamElements(CellLayout):
             t[..., 0:3] -= force
             t[..., 3:6] -= moment
         np.negative(t, out=I[..., 0:6])
-        wxp = cross(w[:, :, None], (ug + self._X0)[..., None, :], (N, G, B, 3))
         I[..., 6:9] = (udg - rT[..., 0, :]) + v + wxp
         np.subtract(thdg, q[..., 0, :], out=I[..., 9:12])
         np.subtract(rT[..., 1, :], self._t4, out=I[..., 12:15])
@@ -363,6 +393,8 @@ class BeamElements(CellLayout):
         c6[..., 0:3] = kFM[:, :, 0]
         np.add(kFM[:, :, 1], eF, out=c6[..., 3:6])
         c6 *= self._halfh
+        if self._muhatT is not None:       # the viscous section loads mu_hat dF/dt
+            FM = FM + yd[:, self._fm_idx].transpose(1, 0, 2) @ self._muhatT
         S[:, 0, :, 0:6] += c6 + FM
         S[:, 1, :, 0:6] += c6 - FM
         if capture is not None:

@@ -106,6 +106,14 @@ class PointwiseBeamJacobian:
         const[:, 24:30, 0:6] -= i6
         const[:, 24:30, 12:18] += i6
         self._const = const
+        # structural damping: both ends' equilibrium rows read the loads' rates (+-mu_hat)
+        self._const_rates = None
+        if beam._muhatT is not None:
+            cr = np.zeros((N, L, L))
+            mu_hat = beam._muhatT.transpose(0, 2, 1)
+            cr[:, 0:6, 24:30] += mu_hat
+            cr[:, 12:18, 24:30] -= mu_hat
+            self._const_rates = cr
         self._root = (np.arange(6), np.arange(6), -np.ones(6))
 
     def values(self, capture: dict, state_rows, h: float, blocks: int, rates: bool = False):
@@ -137,6 +145,8 @@ class PointwiseBeamJacobian:
         V[:, :, 12:18, 24:30] += C6
         if not rates:
             V += self._const[:, None]
+        elif self._const_rates is not None:
+            V += self._const_rates[:, None]
         if capture.get("tip") is not None:          # the tip body: the last node's rows
             T = capture["tip"].imag.reshape(D, nb, 6)[:_FIELDS].transpose(1, 2, 0) / h
             V[N - 1, :, 12:18, 12:24] += T

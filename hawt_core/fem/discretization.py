@@ -8,6 +8,8 @@ from typing import Optional
 from ..model import Beam
 from .beam import BeamElements
 from .beam_jacobian import PointwiseBeamJacobian
+from .damping import DampingCoefficients, modal_families
+from .damping_fit import fit_modal
 from .sections import mesh_beam
 from .spectral import SpectralBeamElements
 from .spectral_jacobian import SpectralPointwiseJacobian
@@ -21,9 +23,12 @@ def beam_elements(beam: Beam, elements: Optional[int] = None, pitch: float = 0.0
     (default ``beam.elements``) of its ``order``, turned by ``pitch`` [rad] about b1."""
     n = int(beam.elements if elements is None else elements)
     order = int(beam.order)
+    damping = DampingCoefficients.of(beam.damping)
+    if modal_families(beam.damping):
+        damping = fit_modal(beam, gauss) + damping
     if order == 1:
-        return BeamElements(mesh_beam(beam, n, pitch=pitch), gauss)
-    return SpectralBeamElements(beam, n, order, pitch=pitch, gauss=gauss)
+        return BeamElements(mesh_beam(beam, n, pitch=pitch), gauss, damping=damping)
+    return SpectralBeamElements(beam, n, order, pitch=pitch, gauss=gauss, damping=damping)
 
 
 def pointwise_jacobian(beam, states: int = 0):

@@ -40,6 +40,8 @@ instead of a polygon (vectors in the frame b turned by theta, as fem/beam.py).
 """
 from __future__ import annotations
 
+from typing import Optional
+
 import numpy as np
 
 from ..model import Beam
@@ -47,6 +49,7 @@ from ..numerics.limits import MAX_ORDER
 from ..numerics.rotations import LEVI_CIVITA_9, rot1, turn_e1_to
 from .beam import (BLOCK_SIZE, ROOT_SIZE, CellLayout, _cross_components, q_stacked,
                    turn_stacked)
+from .damping import DampingCoefficients, section_operators
 from .sections import (ElementProperties, reference_line, sections_at, station_compliance,
                        station_mass)
 
@@ -159,7 +162,7 @@ class SpectralBeamElements(CellLayout):
     BIG = 64
 
     def __init__(self, beam: Beam, elements: int, order: int, pitch: float = 0.0,
-                 gauss: int = 3):
+                 gauss: int = 3, damping: Optional[DampingCoefficients] = None):
         p = int(order)
         if not 1 <= p <= MAX_ORDER:
             raise ValueError(f"order: {order!r} is not allowed; need an integer from 1 to "
@@ -239,6 +242,19 @@ class SpectralBeamElements(CellLayout):
         self._muT = np.ascontiguousarray(self.mass.transpose(0, 1, 3, 2))
         self._t = (A[:, :, 0]).reshape(Ne, Q, 1, 3)
         self._X0 = X.reshape(Ne, Q, 1, 3)
+        # structural damping (fem/damping.py): the F, M rates' viscous loads on the
+        # equilibrium rows, -int phi_j' mu_hat psi_k (Ne, p+1, p, 6, 6), and the
+        # mass-proportional load's operator at the Gauss points (Ne, Q, 6, 6)^T
+        self.damping = damping
+        mu_hat, alpha_mu = section_operators(damping, comp, self.mass.reshape(-1, 6, 6),
+                                             A6)
+        self._Cmu = self._amuT = None
+        if mu_hat is not None:
+            self._Cmu = np.einsum("eq,qj,qk,eqab->ejkab", W, dphi, Pq,
+                                  mu_hat.reshape(Ne, Q, 6, 6))
+        if alpha_mu is not None:
+            self._amuT = np.ascontiguousarray(
+                alpha_mu.reshape(Ne, Q, 6, 6).transpose(0, 1, 3, 2))
         self.points = X.reshape(self.N, G, 3)
         mq = self.mass.reshape(Ne, Q, 6, 6)
         self._mpl = mq[:, :, 0, 0][:, :, None, None]
@@ -261,6 +277,8 @@ class SpectralBeamElements(CellLayout):
         self.tip_inertia = At @ Jt @ At.T
         self._has_tip_body = self.tip_mass != 0 or np.any(Jt != 0)
         self.differential = self._differential_mask()
+        if self._Cmu is not None:          # damped section loads: their rates are read
+            self._mark_rate_loads(np.any(self._Cmu != 0, axis=(1, 3)).reshape(self.N, 6))
         self._index()
 
     # ------------------------------------------------------------------ layout
@@ -337,16 +355,20 @@ class SpectralBeamElements(CellLayout):
         airy = wind is not None
         several = airy and np.ndim(wind) == 3
         m_wind = (np.shape(wind)[1] if several else 1) if airy else 0
-        nT = 3 + grav + m_wind
+        viscous = self._amuT is not None
+        wxp = cross(w[:, :, None], (ug + self._X0)[..., None, :], (Ne, Q, B, 3))
+        nT = 3 + grav + viscous + m_wind
         T = np.empty((Ne, Q, B, nT, 3), dtype=dt)
         T[..., 0, :] = Vg
         T[..., 1, :] = e1g
         T[..., 2, :] = w
         if grav:
             T[..., 3, :] = g
+        if viscous:            # the root frame's velocity at the section: C (v + w x p)
+            T[..., 3 + grav, :] = wxp + v
         if airy:
             T[..., nT - m_wind:, :] = wind if several else wind[:, None, :]
-        sgn = np.array([1.0, 1.0, -1.0] + [-1.0] * grav + [-1.0] * m_wind)[:, None]
+        sgn = np.array([1.0, 1.0, -1.0] + [-1.0] * (grav + viscous + m_wind))[:, None]
         rT, th1 = turn_stacked(thg, T, sgn, cross)
         T2 = np.empty((Ne, Q, B, 2, 3), dtype=dt)
         np.subtract(Omg, rT[..., 2, :], out=T2[..., 0, :])
@@ -361,6 +383,11 @@ class SpectralBeamElements(CellLayout):
             gB = rT[..., 3, :]
             t[..., 0:3] -= self._mpl * gB
             t[..., 3:6] -= cross(self._mxi, gB[..., None, :], gB.shape)
+        if viscous:            # mass-proportional damping of the relative velocities
+            rel = np.empty((Ne, Q, B, 6), dtype=dt)
+            np.subtract(Vg, rT[..., 3 + grav, :], out=rel[..., 0:3])
+            rel[..., 3:6] = T2[..., 0, :]
+            t += rel @ self._amuT
         if section_loads is not None:
             cells = lambda z: None if z is None else z.reshape((self.N, G) + z.shape[2:])
             force, moment = section_loads({
@@ -374,7 +401,6 @@ class SpectralBeamElements(CellLayout):
         np.negative(t, out=I[..., 0:6])
         I[..., 0:3] += kFM[..., 0, :]
         I[..., 3:6] += kFM[..., 1, :] + eF
-        wxp = cross(w[:, :, None], (ug + self._X0)[..., None, :], (Ne, Q, B, 3))
         I[..., 6:9] = (udg - rT[..., 0, :]) + v + wxp
         np.subtract(thdg, q[..., 0, :], out=I[..., 9:12])
         np.subtract(rT[..., 1, :], self._t, out=I[..., 12:15])
@@ -386,6 +412,9 @@ class SpectralBeamElements(CellLayout):
         # node rows (Ne, p+1, B, 12): int phi_j I[0:12], minus int phi_j' F on equilibrium
         Sn = (self._WL @ Ir).reshape(Ne, p + 1, B, 18)[..., 0:12].copy()
         Sn[..., 0:6] -= (self._C @ FMk.reshape(Ne, p, B * 6)).reshape(Ne, p + 1, B, 6)
+        if self._Cmu is not None:          # the viscous section loads diag(mu) dF/dt
+            FMd = yd[:, self._fm_idx].transpose(1, 2, 0, 3)             # (Ne, p, B, 6)
+            Sn[..., 0:6] -= np.einsum("ejkab,ekBb->ejBa", self._Cmu, FMd)
         # strain rows (Ne, p, B, 6): int psi_k [u', theta'] - int psi_k I[12:18]
         St = (self._D @ ends[..., 0:6].reshape(Ne, p + 1, B * 6)).reshape(Ne, p, B, 6)
         St -= (self._WP @ Ir).reshape(Ne, p, B, 18)[..., 12:18]

@@ -85,6 +85,15 @@ class SpectralPointwiseJacobian(PointwiseBeamJacobian):
                 const[:, nn + 6 * k:nn + 6 * k + 6, 12 * j:12 * j + 6] += \
                     beam._D[:, k, j, None, None] * i6
         self._const = const
+        # structural damping: the equilibrium rows read the section loads' rates
+        # (-int phi_j' mu_hat psi_k, constant)
+        self._const_rates = None
+        if beam._Cmu is not None:
+            cr = np.zeros((Ne, L, L))
+            for j in range(p + 1):
+                for k in range(p):
+                    cr[:, 12 * j:12 * j + 6, nn + 6 * k:nn + 6 * k + 6] -= beam._Cmu[:, j, k]
+            self._const_rates = cr
         self._root = (np.arange(6), np.arange(6), -np.ones(6))
 
     def _structure(self, rates: bool) -> np.ndarray:
@@ -113,6 +122,8 @@ class SpectralPointwiseJacobian(PointwiseBeamJacobian):
         M = np.zeros((L, L), bool)
         if rates:
             M |= eq_rows[:, None] & node_cols[None, :]
+            if self.beam._Cmu is not None:          # damped: the loads' rates
+                M |= eq_rows[:, None] & load_cols[None, :]
             M |= kin_rows[:, None] & u_theta[None, :]
             M |= state[:, None] & node_cols[None, :]
         else:
@@ -143,6 +154,8 @@ class SpectralPointwiseJacobian(PointwiseBeamJacobian):
                                                      As[..., Fc]).reshape(Ne, nb, nf, nf)
         if not rates:
             V += self._const[:, None]
+        elif self._const_rates is not None:
+            V += self._const_rates[:, None]
         if capture.get("tip") is not None:
             T = capture["tip"].imag.reshape(D, nb, 6)[:_FIELDS].transpose(1, 2, 0) / h
             V[Ne - 1, :, 12 * p:12 * p + 6, 12 * p:12 * p + 12] += T

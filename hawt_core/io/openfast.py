@@ -41,10 +41,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..model import Beam, Drivetrain, Gravity, Hub, Nacelle, Rotor, SectionTable, Turbine
-from .imported import (ELEMENTS, BladeAxis, ImportResult, hub_yaw_share, iec_axes_to_hawt,
-                       interp_stations, package_version, sections_from_matrices,
-                       untwist_sections)
+from ..model import (Beam, BeamDamping, Drivetrain, Gravity, Hub, Nacelle, Rotor, SectionTable,
+                     Turbine)
+from .imported import (ELEMENTS, IEC_TO_HAWT, BladeAxis, ImportResult, hub_yaw_share,
+                       iec_axes_to_hawt, interp_stations, package_version,
+                       sections_from_matrices, untwist_sections)
 from .turbine_yaml import TurbineFileError
 
 __all__ = ["ImportResult", "read_openfast", "IMPORTER", "ELEMENTS", "TOWER_STEEL"]
@@ -467,12 +468,33 @@ def _blade_beamdyn(deck: _Deck, comp: dict, nb: int):
     stations, sweep, prebend = axis.stations(eta)
     # section twist at the stations from the key points (towards feather -> minus hawt's)
     twist = -np.radians(np.interp(eta, axis.parameter, kp[:, 3]))
-    damp = blade.get("damp_type")
-    if damp:
-        deck.warnings.append(f"{Path(deck.sources['BeamDyn blade']).name}: damp_type = "
-                             f"{damp} (structural damping) read but not modelled")
     return dict(stations=stations, K=K, M=M, twist=twist, length=length, file=bd_main,
-                curve=axis.bend, prebend=prebend, sweep=sweep)
+                curve=axis.bend, prebend=prebend, sweep=sweep, blade=blade)
+
+
+def _beamdyn_damping(deck: _Deck, blade: dict) -> BeamDamping | None:
+    """BeamDyn's stiffness-proportional damping (damp_type = 1: mu1..mu6 [s], per strain of
+    its section frame (x, y, z), z along the span) renamed to hawt's strains; damp_type 2
+    (modal, BeamDyn v3.5+) is warned, not modelled."""
+    name = Path(deck.sources["BeamDyn blade"]).name
+    damp = blade.get("damp_type")
+    if not damp:
+        return None
+    if int(damp) != 1:
+        deck.warnings.append(f"{name}: damp_type = {damp} (modal damping of BeamDyn's own "
+                             "modes) read but not modelled: hawt takes damp_type 1 "
+                             "(stiffness-proportional mu) or ElastoDyn's modal ratios")
+        return None
+    mu = np.array([deck.number("BeamDyn blade", f"mu{i}", rule=">= 0", vt=blade)
+                   for i in range(1, 7)])
+    T = np.zeros((6, 6))
+    T[:3, :3] = T[3:, 3:] = np.abs(IEC_TO_HAWT)
+    mu_hawt = T @ mu
+    deck.notes.append(f"blade: BeamDyn's stiffness-proportional damping mu = "
+                      f"{' '.join(f'{v:g}' for v in mu)} s (x, y, z order), hawt's strain "
+                      f"order {' '.join(f'{v:g}' for v in mu_hawt)} s, applied in hawt's "
+                      "untwisted blade frame")
+    return BeamDamping(stiffness=tuple(float(v) for v in mu_hawt))
 
 
 def _blade(deck: _Deck, comp: dict, ed_file: Path, nb: int, length: float) -> Beam:
@@ -492,7 +514,8 @@ def _blade(deck: _Deck, comp: dict, ed_file: Path, nb: int, length: float) -> Be
         sec = sections_from_matrices(bd["stations"], untwist_sections(bd["K"], bd["twist"]),
                                      untwist_sections(bd["M"], bd["twist"]),
                                      prebend=bd["prebend"], sweep=bd["sweep"])
-        return Beam(length=bd["length"], sections=sec, **ELEMENTS["blade"])
+        return Beam(length=bd["length"], sections=sec,
+                    damping=_beamdyn_damping(deck, bd["blade"]), **ELEMENTS["blade"])
 
     # ElastoDyn blade (CompElast = 1)
     fl = deck.vt["ElastoDyn"]
@@ -513,8 +536,10 @@ def _blade(deck: _Deck, comp: dict, ed_file: Path, nb: int, length: float) -> Be
     t = _table(deck, "ElastoDyn blade", ("BlFract", "BMassDen", "FlpStff", "EdgStff",
                                           "StrcTwst"), vt)
     deck.warnings.append(f"{bfile.name}: BldFl1Sh, BldFl2Sh, BldEdgSh (mode-shape "
-                         "polynomials) and BldFlDmp, BldEdDmp (structural damping) read but "
-                         "not used: hawt's beam elements compute the shapes, undamped")
+                         "polynomials) read but not used: hawt's beam elements compute the "
+                         "shapes")
+    damping = _modal_damping(deck, "ElastoDyn blade", vt, {
+        "flap": ("BldFlDmp1", "BldFlDmp2"), "edge": ("BldEdDmp1",)})
     x = t["BlFract"]
     mass = adj["AdjBlMs"] * t["BMassDen"]
     ei2, ei3 = adj["AdjFlSt"] * t["FlpStff"], adj["AdjEdSt"] * t["EdgStff"]
@@ -548,7 +573,7 @@ def _blade(deck: _Deck, comp: dict, ed_file: Path, nb: int, length: float) -> Be
             "them in the hawt file if known")
         sec = SectionTable(stations=x, mass=mass, i1=2 * i23, i2=i23, i3=i23, gj=gj,
                            ei2=ei2, ei3=ei3, twist=twist)
-    return Beam(length=length, sections=sec, **ELEMENTS["blade"])
+    return Beam(length=length, sections=sec, damping=damping, **ELEMENTS["blade"])
 
 
 def _tower(deck: _Deck, ed_file: Path, flexible: bool) -> Beam | None:
@@ -576,9 +601,10 @@ def _tower(deck: _Deck, ed_file: Path, flexible: bool) -> Beam | None:
     gj = 2.0 * TOWER_STEEL["G_over_E"] * ei
     i23 = ei / TOWER_STEEL["E_over_rho"]
     deck.warnings.append(
-        f"{tfile.name}: TwFAM1Sh.., TwSSM1Sh.. (mode-shape polynomials) and TwrFADmp, "
-        "TwrSSDmp (structural damping) read but not used: hawt's beam elements compute the "
-        "shapes, undamped")
+        f"{tfile.name}: TwFAM1Sh.., TwSSM1Sh.. (mode-shape polynomials) read but not used: "
+        "hawt's beam elements compute the shapes")
+    damping = _modal_damping(deck, "ElastoDyn tower", vt, {
+        "fore_aft": ("TwrFADmp1", "TwrFADmp2"), "side_side": ("TwrSSDmp1", "TwrSSDmp2")})
     deck.warnings.append(
         f"{tfile.name}: an ElastoDyn tower has no torsional rigidity or rotary inertia; hawt "
         "takes those of a thin steel tube with the same bending rigidity (GJ = 2 G/E EI, "
@@ -586,7 +612,30 @@ def _tower(deck: _Deck, ed_file: Path, flexible: bool) -> Beam | None:
         "rigid as in ElastoDyn")
     sec = SectionTable(stations=t["HtFract"], mass=mass, i1=2 * i23, i2=i23, i3=i23, gj=gj,
                        ei2=ei2, ei3=ei3)
-    return Beam(length=height, sections=sec, **ELEMENTS["tower"])
+    return Beam(length=height, sections=sec, damping=damping, **ELEMENTS["tower"])
+
+
+def _modal_damping(deck: _Deck, module: str, vt: dict, families: dict) -> BeamDamping | None:
+    """ElastoDyn's modal damping ratios (% of critical per assumed mode) as the beam's
+    modal damping (model.BeamDamping.modal; fem/damping_fit.py turns them into the beam's
+    Rayleigh damping by ElastoDyn's own rule)."""
+    modal = {}
+    for family, keys in families.items():
+        ratios = [deck.number(module, k, rule=">= 0", vt=vt) for k in keys]
+        for k, z in zip(keys, ratios):
+            if z >= 100:
+                raise TurbineFileError(deck.sources.get(module, str(deck.fst)), [
+                    f"{k} = {z!r}: must be below 100 (% of critical)"])
+        if any(ratios):
+            modal[family] = tuple(z / 100.0 for z in ratios)
+    if not modal:
+        return None
+    deck.notes.append(f"{module.split()[-1]}: structural damping "
+                      + ", ".join(f"{f} " + "/".join(f"{100 * z:g}" for z in v) + " %"
+                                  for f, v in modal.items())
+                      + " of critical (ElastoDyn's modes, turned into the beam's Rayleigh "
+                      "damping by its own rule: docs/structural_damping.md)")
+    return BeamDamping(modal=modal)
 
 
 def _servodyn(deck: _Deck, comp: dict) -> dict | None:

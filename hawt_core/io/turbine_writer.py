@@ -79,6 +79,16 @@ def _aero_dict(a) -> dict:
     return out
 
 
+def _percent(z: float) -> float:
+    """100 z as the decks write it (0.477465, not 0.47746500000000003), provided the reader's
+    value / 100 gives back z exactly."""
+    for digits in (15, 16, 17):
+        v = float(f"{100.0 * z:.{digits}g}")
+        if v / 100.0 == z:
+            return v
+    return float(100.0 * z)
+
+
 def _beam_dict(b: Beam) -> dict:
     out = {"length": float(b.length), "elements": int(b.elements)}
     if int(b.order) != 1:
@@ -87,6 +97,16 @@ def _beam_dict(b: Beam) -> dict:
         out["tip_mass"] = float(b.tip_mass)
     if any(b.tip_inertia):
         out["tip_inertia"] = [float(v) for v in b.tip_inertia]
+    if b.damping is not None and b.damping.enabled:
+        d = b.damping
+        out["damping"] = {}
+        if any(d.stiffness):
+            out["damping"]["stiffness"] = [float(v) for v in d.stiffness]
+        if any(d.mass):
+            out["damping"]["mass"] = [float(v) for v in d.mass]
+        if d.modal:
+            out["damping"]["modal_percent"] = {k: [_percent(z) for z in v]
+                                               for k, v in d.modal.items()}
     out["sections"] = _table_dict(b.sections)
     return out
 

@@ -33,8 +33,8 @@ import yaml
 from ..numerics.limits import (MAX_BLADES, MAX_ELEMENTS, MAX_ORDER, MAX_FILE_BYTES, MAX_POLAR_ANGLES,
                                MAX_POLARS, MAX_ROTOR_SPEED, MAX_SCALAR_CHARS, MAX_YAML_DEPTH,
                                MAX_YAML_VALUES)
-from ..model import (GENERATOR_MODES, PITT_PETERS_SKEW, Aerodynamics, Beam, Drivetrain,
-                     Gravity, Hub, Nacelle, Polar, Rotor, SectionTable, TowerAerodynamics,
+from ..model import (GENERATOR_MODES, PITT_PETERS_SKEW, Aerodynamics, Beam, BeamDamping,
+                     Drivetrain, Gravity, Hub, Nacelle, Polar, Rotor, SectionTable, TowerAerodynamics,
                      Turbine)
 from .checker import _Checker, _plain, _show, _type_name
 
@@ -201,9 +201,12 @@ _NACELLE = {"yaw_inertia": True, "yaw_stiffness": False, "yaw_damping": False,
             "cg_offset": False, "inertia_pitch": False, "inertia_roll": False,
             "shaft_height": False, "yaw_bearing_mass": False}
 _TOWER = {"length": True, "elements": True, "sections": True, "rigid": False,
-          "order": False}
+          "order": False, "damping": False}
 _BEAM = {"length": True, "elements": True, "sections": True, "tip_mass": False,
-         "tip_inertia": False, "order": False}
+         "tip_inertia": False, "order": False, "damping": False}
+_DAMPING = {"stiffness": False, "mass": False, "modal_percent": False}
+#: the mode families a blade's and a tower's modal damping may name
+_MODAL_FAMILIES = {"blade": ("flap", "edge"), "tower": ("fore_aft", "side_side")}
 _GRAVITY = {"enabled": True, "g": False}
 #: Per-station scalar properties: name -> value rule (a key of _RULES).
 SCALAR_PROPS = {
@@ -327,9 +330,65 @@ def _beam(c: _Checker, value: Any, path: str, spec: dict) -> Optional[Beam]:
             c.error(f"{path}.tip_inertia", "every value must be >= 0 [kg m^2]",
                     d["tip_inertia"])
             tip["tip_inertia"] = None
-    if None in (length, elements, sections, order) or None in tip.values():
+    damping = _damping(c, d["damping"], f"{path}.damping",
+                       _MODAL_FAMILIES["blade" if blade else "tower"]) \
+        if "damping" in d else None
+    if None in (length, elements, sections, order) or None in tip.values() or \
+            damping is False:
         return None
-    return Beam(length=length, sections=sections, elements=elements, order=order, **tip)
+    return Beam(length=length, sections=sections, elements=elements, order=order,
+                damping=damping, **tip)
+
+
+def _damping(c: _Checker, value: Any, path: str, families: tuple):
+    """A BeamDamping (None: an empty mapping; False on error): ``stiffness`` mu [s] per
+    strain and ``mass`` alpha [1/s] per velocity component (six numbers >= 0 each), or
+    ``modal_percent``: % of critical per mode family (1 or 2 values >= 0 and < 100)."""
+    n_errors = len(c.errors)
+    d = c.mapping(value, path, _DAMPING)
+    if d is None:
+        return False
+    out = {}
+    for key, unit in (("stiffness", "s"), ("mass", "1/s")):
+        if key not in d:
+            continue
+        v = _plain(d[key])
+        if not isinstance(v, (list, tuple)) or len(v) != 6:
+            c.error(f"{path}.{key}", f"must be a list of six numbers >= 0 [{unit}] (per "
+                    + ("strain [gamma1, gamma2, gamma3, kappa1, kappa2, kappa3])"
+                       if key == "stiffness" else
+                       "velocity component [v1, v2, v3, omega1, omega2, omega3])"), v)
+            continue
+        out[key] = tuple(c.number_value(_plain(x), f"{path}.{key}[{i}]", ">= 0")
+                         for i, x in enumerate(v))
+    if "modal_percent" in d:
+        m = c.mapping(d["modal_percent"], f"{path}.modal_percent",
+                      {f: False for f in families})
+        modal = {}
+        for f in families if m is not None else ():
+            if f not in m:
+                continue
+            v = _plain(m[f])
+            v = list(v) if isinstance(v, (list, tuple)) else [v]
+            where = f"{path}.modal_percent.{f}"
+            if not 1 <= len(v) <= 2:
+                c.error(where, "must be one or two numbers (% of critical of the "
+                        "family's first modes)", m[f])
+                continue
+            zs = [c.number_value(_plain(x), f"{where}[{i}]", ">= 0") for i, x in enumerate(v)]
+            if any(z is not None and z >= 100 for z in zs):
+                c.error(where, "must be below 100 (% of critical)", m[f])
+            elif None not in zs:
+                modal[f] = tuple(z / 100.0 for z in zs)
+        if modal:
+            out["modal"] = modal
+        if modal and ("stiffness" in out or "mass" in out):
+            c.error(path, "give modal_percent or stiffness/mass, not both (the modal ratios "
+                    "are turned into stiffness and mass damping on the discretization)")
+    if len(c.errors) > n_errors:
+        return False
+    damping = BeamDamping(**out)
+    return damping if damping.enabled else None
 
 
 def _vector3(c: _Checker, d: Mapping, key: str, path: str,

@@ -19,7 +19,7 @@ CHORD_CONTRACTION = 0.05
 
 def newton(fun, jac, y0, tol=1e-9, max_iter=30, what="steady state", fixed=None,
            linear_solve=None, reuse_jacobian: bool = False, scale=None,
-           min_scale: float = 1.0):
+           min_scale: float = 1.0, border=None):
     """Newton's method with a sparse LU; ``tol`` is relative to the first residual's scale
     (or to ``scale`` when given: a warm start's small first residual would otherwise ask for
     a tolerance below the residual's round-off; an array gives each row its own scale, for
@@ -41,10 +41,17 @@ def newton(fun, jac, y0, tol=1e-9, max_iter=30, what="steady state", fixed=None,
     fixed unknowns and ``B`` fixed pseudo-random columns (generically outside the range of
     J, which makes the bordered matrix regular); for a consistent system ``mu`` vanishes at
     the solution, which is then the one with the fixed unknowns unchanged.
+    ``border``: {j: (column (n,), update)} for some fixed unknowns ``fixed[j]``: their
+    border is that column instead, the derivative of the residual with respect to a
+    parameter ``p`` it is linear in, and ``update(mu)`` is called with each step's ``mu``
+    to set ``p -= mu``: the parameter is then solved for with the others (a trim: the
+    generator torque that balances a free drivetrain, its azimuth held).  Row scales
+    apply to the column as to the rows.
     Raises ConvergenceError naming ``what``, the iteration count and the residual reached.
     """
     y = np.array(y0, dtype=float)
     r = fun(y)
+    r_unit = None
     if scale is None:
         scale = max(1.0, float(min_scale), np.max(np.abs(r)))
     elif np.ndim(scale):                  # one scale per row: rows of different units
@@ -61,6 +68,8 @@ def newton(fun, jac, y0, tol=1e-9, max_iter=30, what="steady state", fixed=None,
     n, k = len(y), len(fixed)
     P = sp.csc_matrix((np.ones(k), (fixed, np.arange(k))), shape=(n, k))
     Bcols = np.random.default_rng(12345).standard_normal((n, k))
+    border = {j: (np.asarray(col, float) / (r_unit if r_unit is not None else 1.0), up)
+              for j, (col, up) in (border or {}).items()}
     J, lu = None, None
     for it in range(max_iter):
         if not np.all(np.isfinite(r)):
@@ -74,14 +83,19 @@ def newton(fun, jac, y0, tol=1e-9, max_iter=30, what="steady state", fixed=None,
             if lu is None:
                 A = J
                 if k:
-                    B = sp.csc_matrix(Bcols * (abs(J).max() / np.sqrt(n)))
-                    A = sp.bmat([[J, B], [P.T, None]], format="csc")
+                    Bd = Bcols * (abs(J).max() / np.sqrt(n))
+                    for j, (col, _) in border.items():
+                        Bd[:, j] = col
+                    A = sp.bmat([[J, sp.csc_matrix(Bd)], [P.T, None]], format="csc")
                 try:
                     lu = spl.splu(A)
                 except RuntimeError as exc:  # singular factor
                     raise ConvergenceError(f"{what}: singular Jacobian at iteration {it} "
                                            f"({exc})") from exc
-            dy = lu.solve(np.concatenate([r, np.zeros(k)]))[:n]
+            sol = lu.solve(np.concatenate([r, np.zeros(k)]))
+            dy = sol[:n]
+            for j, (_, update) in border.items():
+                update(sol[n + j])
         r_old = np.max(np.abs(r))
         y = y - dy
         r = fun(y)

@@ -137,6 +137,8 @@ class ModalResult:
         if s.get("wind_speed") is not None:
             header += (f", in wind {s['wind_speed']:.4g} m/s (pitch {s['pitch_deg']:.3g} deg; "
                        f"{s['aerodynamics']})")
+        if s.get("structural_damping"):
+            header += f"; {s['structural_damping']}"
         footer = []
         if self.unresolved:
             if s["method"] in ("radau", "paper"):
@@ -234,7 +236,9 @@ class BladeModesResult:
     def table(self) -> str:
         lines = [f"Blade modes, clamped on the hub at {self.rotor_speed:.4g} rad/s, "
                  f"{self.elements} elements{_of_order(self.settings)} "
-                 f"({self.settings.get('method', '')})",
+                 f"({self.settings.get('method', '')})"
+                 + (f"; {self.settings['structural_damping']}"
+                    if self.settings.get("structural_damping") else ""),
                  f"{'mode':<16}{'per-rev':>12}{'Hz':>12}{'damping':>12}"
                  + (f"{'est. error':>12}" if self.estimated else "")]
         for m in self.modes:

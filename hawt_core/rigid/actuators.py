@@ -81,6 +81,11 @@ class ControlInputs:
             raise ValueError(f"torque: {torque!r} is not allowed; need a finite number [N m]")
         return float(torque)
 
+    def hold_torque(self, torque: float) -> None:
+        """Hold the generator torque at ``torque`` [N m, HSS] from now on (a trim's update)."""
+        self._torque = _Ramp(self._check_torque(torque))
+        self.version += 1
+
     def command(self, t0: float, t1: float, pitch=None, torque=None) -> None:
         """Ramp from the values at ``t0`` to ``pitch`` (one or one per blade) and ``torque``
         at ``t1`` > ``t0`` [s] (None: hold)."""

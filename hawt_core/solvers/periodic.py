@@ -35,6 +35,7 @@ import scipy.sparse.linalg as spl
 from ..numerics.newton import ConvergenceError, newton
 from .equilibrium import check_equilibrium_exists
 from .steady import constant_steady_state, ignorable_columns
+from .trim import generator_trim
 
 
 def fourier_differentiation(M: int, period: float) -> np.ndarray:
@@ -112,6 +113,7 @@ def periodic_steady_state(model, harmonics: int = 8, tol: float = 1e-9, max_iter
     if model.rotor_speed <= 0:
         raise ValueError(f"rotor_speed: {model.rotor_speed} is not allowed for a periodic "
                          "steady state; need > 0 [rad/s]")
+    generator_trim(model)            # a free generator in wind: its torque is trimmed
     check_equilibrium_exists(model)
     if not _gravity_turns(model):
         try:
@@ -405,9 +407,15 @@ def _harmonic_balance(model, harmonics, tol, max_iter, progress, guess,
     # their value at t = 0 (bordered Newton steps, see blade_modes.newton)
     ign = ignorable_columns(first[0] if not np.any(Yd0[0])
                             else model.jacobians(np.zeros(n), Y[0], times[0])[0])
+    # a free generator's torque, trimmed (solvers/trim.py): its azimuth is held at the
+    # first sample, the torque solved for
+    trim = generator_trim(model)
+    border = None
+    if trim is not None:
+        ign, border = trim.border(ign, residual, Y.ravel())
     Yflat, it = newton(residual, jacobian, Y.ravel(), tol=tol, max_iter=max_iter,
                        what=f"periodic steady state (harmonic balance, {harmonics} harmonics)",
-                       fixed=ign, linear_solve=krylov,
+                       fixed=ign, linear_solve=krylov, border=border,
                        # the tolerance's scale at least the loads the state balances (a warm
                        # start's small first residual would ask for less than the round-off
                        # of the blade-root rows)

@@ -7,6 +7,7 @@ import scipy.sparse as sp
 
 from ..numerics.newton import newton
 from .equilibrium import check_equilibrium_exists
+from .trim import generator_trim
 
 __all__ = ["constant_steady_state", "is_time_invariant_at", "ignorable_columns"]
 
@@ -35,6 +36,7 @@ def constant_steady_state(model, tol=1e-10, check: bool = True) -> np.ndarray:
     when no steady state can exist (solvers/equilibrium.py; ``check`` False: the caller
     checked).
     """
+    trim = generator_trim(model)
     if check:
         check_equilibrium_exists(model)
     z = np.zeros(model.n)
@@ -44,8 +46,11 @@ def constant_steady_state(model, tol=1e-10, check: bool = True) -> np.ndarray:
     # Newton's first step is at y0 again: reuse J0 there
     jac = lambda y: J0 if np.array_equal(y, y0) else model.jacobians(z, y, 0.0)[0]
     ignorable = ignorable_columns(J0)
+    border = None
+    if trim is not None:
+        ignorable, border = trim.border(ignorable, fun, y0)
     y, _ = newton(fun, jac, y0, tol=tol, what="turbine steady state", fixed=ignorable,
-                  scale=model.load_scale())
+                  scale=model.load_scale(), border=border)
     if not is_time_invariant_at(model, y):
         raise ValueError("steady state: this configuration (gravity, tilt or an asymmetric "
                          "rotor) has a periodic steady state, not a constant one; use the "

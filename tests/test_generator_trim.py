@@ -1,0 +1,125 @@
+"""A free generator held by a trimmed torque (hawt_core/solvers/trim.py, numerics/newton.py's
+border): OpenFAST's linearization with CalcSteady, TrimCase 2.
+
+References and tolerances (the shipped NREL 5-MW, rigid tower and shaft, yaw locked, no
+gravity and no tilt so that the steady state is constant, 9 rpm, 8 m/s, frozen wake):
+- the trimmed torque is the rotor's aerodynamic torque: the axisymmetric aeroelastic blade
+  (assembly/aero_blade.py, an independent blade-element momentum solution of one blade on
+  the spinning hub) times the blade count over the gearbox ratio, within 1e-6 relative;
+- the free drivetrain's modes: the rotor azimuth's zero exponent, and the rotor speed's
+  real exponent ``dQ/dOmega / J`` with J the rotor's and the generator's inertia about the
+  shaft (hub, blades, N^2 J_gen) and dQ/dOmega the frozen-wake slope of that aerodynamic
+  torque (the induced velocities held) by central differences of the same independent
+  solution at 9 +- 0.05 rpm: within 2 % (the blades' flexibility and their lag coupling
+  are in hawt's exponent, not in the rigid estimate);
+- the collective lag mode couples with the free drivetrain: its frequency rises above the
+  prescribed-speed one (the root no longer held), the backward and forward lag modes do not
+  move (1e-6 relative: cyclic modes exert no net shaft torque).
+"""
+from __future__ import annotations
+
+import dataclasses as dc
+import math
+
+import numpy as np
+import pytest
+
+from test_real_turbines import quiet_load
+from hawt_core.aero.wind import Wind
+from hawt_core.analyses.modal import modal_analysis
+from hawt_core.assembly import TurbineModel
+from hawt_core.assembly.aero_blade import AeroelasticBlade
+from hawt_core.solvers.equilibrium import NoEquilibrium
+from hawt_core.numerics.jacobian import dense_complex_step
+from hawt_core.solvers.steady import constant_steady_state
+
+OMEGA = 9 * math.pi / 30
+
+
+def _turbine(generator="free"):
+    t = quiet_load("nrel5mw")
+    return dc.replace(t, tower=None, nacelle=dc.replace(t.nacelle, yaw_free=False,
+                                                        shaft_tilt=0.0),
+                      gravity=dc.replace(t.gravity, enabled=False),
+                      drivetrain=dc.replace(t.drivetrain, stiffness=None, damping=0.0,
+                                            generator=generator),
+                      rotor=dc.replace(t.rotor, speed=OMEGA, pitch=0.0))
+
+
+def _aero_torque(t, omega, frozen=None):
+    """The rotor's aerodynamic torque [N m, LSS] at ``omega`` from the axisymmetric
+    aeroelastic blade: its BEM equilibrium, or with ``frozen`` (the blade state at OMEGA)
+    the wake frozen there (the induced velocities a U and a' OMEGA r held, as the
+    linearization's frozen wake), the blade's deflection solved again."""
+    blade = AeroelasticBlade(t, 8.0, rotor_speed=omega)
+    if frozen is None:
+        return t.rotor.blades * blade.root_loads(blade.steady_state())[0]
+    nb = blade.n_beam
+    y = frozen.copy()
+    y[nb + blade.n_stations:] *= OMEGA / omega           # a' Omega r held
+    z = np.zeros(blade.n)
+    for _ in range(8):                                    # Newton on the beam rows
+        r = blade.residual(z, y)[:nb]
+        J = dense_complex_step(lambda yb: blade.residual(z, np.concatenate([yb, y[nb:]]))[:nb],
+                               y[:nb])
+        y[:nb] -= np.linalg.solve(J, r)
+    assert np.abs(blade.residual(z, y)[:nb]).max() < 1e-6 * np.abs(y[:12]).max()
+    return t.rotor.blades * blade.root_loads(y)[0]
+
+
+def test_trimmed_torque_is_the_rotors_aerodynamic_torque():
+    t = _turbine()
+    model = TurbineModel(t, wind=Wind(8.0))
+    y = constant_steady_state(model)
+    N = t.drivetrain.gearbox_ratio
+    ref = _aero_torque(t, OMEGA) / N
+    print(f"\ntrimmed {model.trimmed_torque:.8g} N m, aerodynamic {ref:.8g} N m (HSS)")
+    assert model.trimmed_torque == pytest.approx(ref, rel=1e-6)
+    # the generator turns at the rotor speed: its speed perturbation is zero
+    assert abs(y[model.nq + list(model.rigid.coordinates).index("generator_azimuth")]) < 1e-9
+
+
+def test_free_drivetrain_modes_against_the_rigid_rotor_estimate():
+    t = _turbine()
+    r = modal_analysis(t, wind=Wind(8.0), max_per_rev=20)
+    drive = [m for m in r.modes if m.family == "drivetrain"]
+    rates = sorted(m.real_per_rev * OMEGA for m in drive)
+    assert len(drive) == 2 and rates[1] == pytest.approx(0.0, abs=1e-9)
+    # the rigid-rotor estimate, from the independent blade solution
+    d = 0.05 * math.pi / 30
+    at = AeroelasticBlade(t, 8.0, rotor_speed=OMEGA)
+    y0 = at.steady_state()
+    slope = (_aero_torque(t, OMEGA + d, y0) - _aero_torque(t, OMEGA - d, y0)) / (2 * d)
+    sec = t.blade.sections
+    x = sec.stations * t.blade.length
+    r_c = t.hub.radius + x * math.cos(t.rotor.precone)
+    blades = t.rotor.blades * np.trapezoid(np.asarray(sec.mass) * r_c ** 2, x)
+    J = (blades + t.hub.inertia_longitudinal
+         + t.drivetrain.gearbox_ratio ** 2 * t.drivetrain.generator_inertia)
+    print(f"rotor-speed exponent {rates[0]:.6f} 1/s, rigid estimate {slope / J:.6f} 1/s")
+    assert rates[0] == pytest.approx(slope / J, rel=2e-2)
+    assert r.settings["generator_torque"] == pytest.approx(_aero_torque(t, OMEGA)
+                                                           / t.drivetrain.gearbox_ratio,
+                                                           rel=1e-6)
+    held = modal_analysis(_turbine("prescribed"), wind=Wind(8.0), max_per_rev=20)
+
+    def lag(res, whirl):
+        return [m for m in res.modes if m.family == "lag" and m.index == 1
+                and m.whirl == whirl][0].fixed_frame_hz
+    assert lag(r, "collective") > 1.5 * lag(held, "collective")
+    for whirl in ("backward", "forward"):
+        assert lag(r, whirl) == pytest.approx(lag(held, whirl), rel=1e-6)
+
+
+def test_a_free_generator_without_wind_or_with_controls_is_not_trimmed():
+    """In a vacuum nothing needs a torque; a closed loop's controls keep theirs: the
+    unbalanced rotor is refused up front as before (solvers/equilibrium.py)."""
+    from hawt_core.rigid.actuators import ControlInputs
+    t = _turbine()
+    model = TurbineModel(t, wind=Wind(8.0))
+    model.set_controls(ControlInputs(t.rotor.blades, pitch=0.0, torque=0.0))
+    with pytest.raises(NoEquilibrium, match="drivetrain.generator: 'free'"):
+        constant_steady_state(model)
+    vac = TurbineModel(t)
+    constant_steady_state(vac)
+    assert getattr(vac, "trimmed_torque", None) is None
