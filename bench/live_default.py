@@ -77,6 +77,9 @@ def main(argv=None):
     ap.add_argument("--steps", type=float, nargs="+", default=[5.0, 1.0],
                     help="azimuth steps [deg] (default 5 1)")
     ap.add_argument("--repeat", type=int, default=2)
+    ap.add_argument("--compare-undamped", action="store_true",
+                    help="also each mesh with the structure undamped (the cost of the "
+                         "deck's structural damping, in the same run)")
     args = ap.parse_args(argv)
     warnings.simplefilter("ignore")
     base = load_any(args.turbine)
@@ -92,8 +95,13 @@ def main(argv=None):
             f"{'tip 15':>9}" + "".join(f"{f'rtf {s:g}deg':>11}" for s in args.steps)
             + f"{'start-up':>10}")
     print(head)
-    for n, p in args.meshes:
+    cases = [(n, p, False) for n, p in args.meshes]
+    if args.compare_undamped:
+        cases = [c for n, p in args.meshes for c in ((n, p, False), (n, p, True))]
+    for n, p, undamped in cases:
         t = with_mesh(base, n, p)
+        if undamped:
+            t = t.without_structural_damping()
         r = blade_modes(t, elements=n, rotor_speed=t.rotor.speed, count=6)
         unknowns = r.settings["unknowns"]
         f = np.sort([m.frequency_hz for m in r.modes])[:3]
@@ -106,7 +114,8 @@ def main(argv=None):
                 rtf, s = real_time_factor(t, discon, args.wind, step, args.duration)
                 best, setup = max(best, rtf), min(setup, s)
             rtfs.append(best)
-        kind = "paper element" if p == 1 else f"order {p}"
+        kind = ("paper element" if p == 1 else f"order {p}") + (" undamped" if undamped
+                                                                else "")
         print(f"{f'{n} x {kind}':<24}{unknowns:>9}{100 * ef:>9.3f}%{100 * ed[0]:>+8.2f}%"
               f"{100 * ed[1]:>+8.2f}%" + "".join(f"{x:>11.2f}" for x in rtfs)
               + f"{setup:>9.1f}s", flush=True)

@@ -88,6 +88,34 @@ def match(modes):
     return out
 
 
+def assumed_mode_estimate(t) -> tuple:
+    """(clamped collective lag [Hz], ElastoDyn-like estimate [Hz]) of the collective edge
+    with a free rotor: the clamped blade's first lag shape (hawt's blade modes at the rotor
+    speed) kept as the one edge shape, coupled to the rigid rotor's rotation (two degrees of
+    freedom, Rayleigh-Ritz: omega^2 = omega_c^2 / (1 - Nb S^2 / (J m_q)), S = int m r u2,
+    m_q = int m |u|^2, J the rotor's and the generator's inertia).  An upper bound of the
+    beam's own free-rotor mode, as ElastoDyn's assumed mode is."""
+    import numpy as np
+    from scipy.interpolate import CubicSpline
+    from hawt_core.analyses.blade_modes import blade_modes
+    lag = [m for m in blade_modes(t, rotor_speed=t.rotor.speed).modes if m.family == "lag"][0]
+    sh = lag.shape
+    x = np.asarray(sh["span"])
+    u = np.asarray(sh["displacement"])
+    fine = np.linspace(0.0, x[-1], 2001)
+    u2, u3 = (CubicSpline(x, u[:, k])(fine) for k in (1, 2))
+    sec = t.blade.sections
+    m = np.interp(fine / t.blade.length, sec.stations, sec.mass)
+    r = t.hub.radius + fine * np.cos(t.rotor.precone)
+    nb = t.rotor.blades
+    S = np.trapezoid(m * r * u2, fine)
+    mq = np.trapezoid(m * (u2 ** 2 + u3 ** 2), fine)
+    J = (nb * np.trapezoid(m * r ** 2, fine) + t.hub.inertia_longitudinal
+         + t.drivetrain.gearbox_ratio ** 2 * t.drivetrain.generator_inertia)
+    fc = lag.frequency_hz
+    return fc, fc / math.sqrt(1.0 - nb * S ** 2 / (J * mq))
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.parse_args()
@@ -111,6 +139,9 @@ def main():
         torque = r.settings.get("generator_torque")
         print(f"hawt, {name}: {dt:.1f} s"
               + (f"; generator torque trimmed to {torque:.6g} N m (HSS)" if torque else ""))
+    fc, est = assumed_mode_estimate(case(generator="free", upright=True))
+    print(f"collective edge with a free rotor, the clamped lag shape ({fc:.4f} Hz) kept as "
+          f"ElastoDyn keeps its assumed mode: {est:.4f} Hz (an upper bound of the beam's)")
     print(f"\n{'mode':<34}{'OpenFAST f0':>12}{'hawt f0':>10}{'diff':>8}"
           f"{'OpenFAST zeta':>15}{'hawt zeta':>11}{'diff':>8}{'undamped str.':>15}")
     for name, (f_of, z_of) in OPENFAST.items():
