@@ -124,8 +124,9 @@ def main():
         "held": dict(generator="prescribed"),
         "held, undamped structure": dict(generator="prescribed", damped=False),
         # the collective edge with the generator: free generator, torque trimmed; upright
-        # (no gravity, tilt or precone): with them the free azimuth's Floquet eigenvectors
-        # are mislabelled (issue 34, open) and the trimmed harmonic balance takes 100-200 s
+        # (no gravity, tilt or precone): with them the trimmed harmonic balance takes
+        # 100-200 s (its Newton steps use the whole system's LU) and Hill's whole pencil,
+        # which a free azimuth needs, misses the heavily damped 1st collective flap
         "free generator, upright": dict(generator="free", upright=True),
     }
     rows = {}

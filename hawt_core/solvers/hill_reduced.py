@@ -66,6 +66,12 @@ MAX_PARALLEL = 0.99
 #: ... and nearer than this (relative to max(|lambda|, w)): round-off splits a double
 #: eigenvalue by ~sqrt(eps) (the three-bladed rotor's free yaw: 3e-9 of w).
 DEFECTIVE_SPLIT = 1e-5
+#: ... or nearer than this and both near zero (below NEAR_ZERO of w): a free coordinate's
+#: pair (a free generator's azimuth and the rotor speed's slow aerodynamic decay, 0 and
+#: 0.017 w on the NREL 5-MW) is nearly defective: its modal coordinates mix the pair into
+#: every other mode's vector (the azimuth at 2x the blade tip's motion where the whole
+#: pencil and the monodromy find 1e-3 of it)
+NEAR_ZERO = 0.05
 
 
 class ReductionFailed(RuntimeError):
@@ -140,6 +146,8 @@ def _modal_coordinates(Xr, Yr, A0, E0, scale: float):
     parallel = np.abs(VR.conj().T @ VR) - np.eye(mu.size) > MAX_PARALLEL
     close = np.abs(mu[:, None] - mu[None, :]) <= DEFECTIVE_SPLIT * np.maximum(
         np.abs(mu)[:, None], scale)
+    slow = np.abs(mu) <= NEAR_ZERO * scale
+    close |= slow[:, None] & slow[None, :]
     if not np.all(np.isfinite(mu)) or np.any(parallel & close):
         raise ReductionFailed("the averaged pencil has a defective (or infinite) eigenvalue "
                               "among the basis's: no modal coordinates")
