@@ -73,8 +73,8 @@ def test_trimmed_torque_is_the_rotors_aerodynamic_torque():
     y = constant_steady_state(model)
     N = t.drivetrain.gearbox_ratio
     ref = _aero_torque(t, OMEGA) / N
-    print(f"\ntrimmed {model.trimmed_torque:.8g} N m, aerodynamic {ref:.8g} N m (HSS)")
-    assert model.trimmed_torque == pytest.approx(ref, rel=1e-6)
+    print(f"\ntrimmed {model.generator_trim.torque:.8g} N m, aerodynamic {ref:.8g} N m (HSS)")
+    assert model.generator_trim.torque == pytest.approx(ref, rel=1e-6)
     # the generator turns at the rotor speed: its speed perturbation is zero
     assert abs(y[model.nq + list(model.rigid.coordinates).index("generator_azimuth")]) < 1e-9
 
@@ -122,7 +122,7 @@ def test_a_free_generator_without_wind_or_with_controls_is_not_trimmed():
         constant_steady_state(model)
     vac = TurbineModel(t)
     constant_steady_state(vac)
-    assert getattr(vac, "trimmed_torque", None) is None
+    assert vac.generator_trim is None
 
 
 def test_with_gravity_the_blade_modes_keep_their_labels_and_the_azimuth_is_small():

@@ -41,6 +41,16 @@ def fit_frequency(t, x, w0):
     return abs(p[3])
 
 
+def decay_rate(t, x):
+    """(rate [1/s], peak count): the logarithmic decrement of the peaks of ``x(t)`` from
+    the first to the last, per second."""
+    peaks = [i for i in range(1, len(x) - 1) if x[i] > x[i - 1] and x[i] >= x[i + 1]]
+    if len(peaks) < 2:
+        return float("nan"), len(peaks)
+    a, b = peaks[0], peaks[-1]
+    return float(np.log(x[a] / x[b]) / (t[b] - t[a])), len(peaks)
+
+
 # ---------------------------------------------------------------- energy (Jacobi integral)
 def at_gauss(beam, a):
     """Linear interpolation of nodal values (B, N+1, 3) to the Gauss points (B, N, G, 3)."""

@@ -298,6 +298,7 @@ def test_simulated_teeter_decay_is_locks_damping():
     over three revolutions gives C / (2 I) within 0.5 % (found 0.14 %: the nonlinear
     amplitude, the step)."""
     from hawt_core.solvers.march import Simulator
+    from test_simulate import decay_rate
     t = teetering_rotor()
     n = 4
     model = TurbineModel(t, elements=n, wind=Wind(1e-3),
@@ -310,11 +311,8 @@ def test_simulated_teeter_decay_is_locks_damping():
     sim = Simulator(model, step_deg=1.0, perturb={"teeter": 0.01}, method="step")
     sim.run(3 * model.period)
     h = sim.history()
-    q, tt = h["teeter"], h["time"]
-    peaks = [i for i in range(1, len(q) - 1) if q[i] > q[i - 1] and q[i] >= q[i + 1]]
-    assert len(peaks) >= 2
-    a, b = peaks[0], peaks[-1]
-    found = np.log(q[a] / q[b]) / (tt[b] - tt[a])
+    found, peaks = decay_rate(h["time"], h["teeter"])
+    assert peaks >= 2
     print(f"\nsimulated decay {found:.6f} 1/s, Lock {rate:.6f} 1/s")
     assert found == pytest.approx(rate, rel=5e-3)
 

@@ -462,9 +462,9 @@ def _modal_analysis(turbine, elements, rotor_speed, steps, method, fast, harmoni
                 "blades": model.n_blades, "resolution_per_rev": limit,
                 "steady_state": "constant" if steady.constant
                 else f"periodic ({harmonics} harmonics)", **extra}
-    if getattr(model, "trimmed_torque", None) is not None:
+    if model.generator_trim is not None:
         # a free generator held by the torque the steady state trimmed (solvers/trim.py)
-        settings["generator_torque"] = float(model.trimmed_torque)
+        settings["generator_torque"] = model.generator_trim.torque
     if wind is not None:
         a, ap = model.aero.inductions
         settings.update({"wind_speed": float(wind.speed),

@@ -98,6 +98,9 @@ class TurbineModel:
         self.n_aero = self.aero.n if self.aero is not None else 0
         self.blade_size = self.beam.n + self.n_aero
         self._capture = None      # a dict the aerodynamics fill during one residual (aero_loads)
+        #: a free generator's torque, trimmed by the steady state (solvers/trim.py
+        #: GeneratorTrim: its ``torque`` [N m, HSS]) once a steady-state solver set it up
+        self.generator_trim = None
         self.layout = StateLayout(self.rigid, self.n_blades, self.beam, self.tower,
                                   aero_states=self.aero.state_names if self.n_aero else ())
         self.n = self.layout.n

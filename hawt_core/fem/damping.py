@@ -93,7 +93,8 @@ def section_operators(coeffs: Optional[DampingCoefficients], compliance: np.ndar
 
 
 def modal_families(damping: Optional[BeamDamping]) -> dict:
-    """{family: ratios} of ``damping.modal``, checked against model.MODAL_FAMILIES."""
+    """{family: ratios} of ``damping.modal``, checked against model.MODAL_FAMILIES and
+    for one or two ratios each (the family's first modes)."""
     if damping is None or not damping.modal:
         return {}
     out = {}
@@ -102,4 +103,7 @@ def modal_families(damping: Optional[BeamDamping]) -> dict:
             raise ValueError(f"damping.modal: family {k!r} is not allowed; allowed: "
                              f"{', '.join(MODAL_FAMILIES)}")
         out[k] = tuple(float(z) for z in v)
+        if not 1 <= len(out[k]) <= 2:
+            raise ValueError(f"damping.modal.{k}: {len(out[k])} ratios; allowed: 1 or 2 "
+                             "(the family's first modes)")
     return out

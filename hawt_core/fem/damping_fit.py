@@ -27,13 +27,9 @@ import scipy.linalg as sla
 from scipy.optimize import nnls
 
 from ..model import MODAL_FAMILIES, Beam
-from .beam import BeamElements
-from .beam_jacobian import PointwiseBeamJacobian
 from .damping import DampingCoefficients, modal_families, plane_velocities
+from .elements import discretize, pointwise_jacobian
 from .energy import classify_energy
-from .sections import mesh_beam
-from .spectral import SpectralBeamElements
-from .spectral_jacobian import SpectralPointwiseJacobian
 
 __all__ = ["fit_modal", "clamped_pencil", "clamped_modes", "mode_families", "refine"]
 
@@ -45,8 +41,7 @@ def clamped_pencil(elements, rates: bool = True, values: bool = True):
     """(A, E) dense (n, n): dR/dy and dR/dydot of the discretized beam ``elements`` at rest
     (root clamped and fixed, no gravity), by the Gauss-point complex steps (exact;
     fem/beam_jacobian.py); either is None when not asked for."""
-    pw = (SpectralPointwiseJacobian(elements) if isinstance(elements, SpectralBeamElements)
-          else PointwiseBeamJacobian(elements))
+    pw = pointwise_jacobian(elements)
     z = np.zeros(elements.n)
 
     def fun(Yd, Y, cap):
@@ -114,10 +109,9 @@ def fit_modal(beam: Beam, gauss: int = 3) -> DampingCoefficients:
     hit = _CACHE.get(key)
     if hit is not None and hit[0] is beam.sections:
         return hit[1]
-    elements = FIT_ELEMENTS
     bare = replace(beam, tip_mass=0.0, tip_inertia=(0.0, 0.0, 0.0), damping=None,
                    elements=FIT_ELEMENTS, order=FIT_ORDER)
-    base = _build(bare, elements, gauss, None)
+    base = discretize(bare, gauss=gauss)
     A0, E0 = clamped_pencil(base)
     count = 4 * sum(len(z) for z in families.values()) + 8
     lam, vr, vl = clamped_modes(A0, E0, count)
@@ -126,9 +120,6 @@ def fit_modal(beam: Beam, gauss: int = 3) -> DampingCoefficients:
     targets, zeta = [], []
     for name, ratios in families.items():
         found = np.flatnonzero(fam == MODAL_FAMILIES[name])
-        if len(ratios) > 2:
-            raise ValueError(f"damping.modal.{name}: {len(ratios)} ratios; allowed: 1 or 2 "
-                             "(the family's first modes)")
         if len(found) < len(ratios):
             raise ValueError(f"damping.modal.{name}: the beam has {len(found)} {name} "
                              f"mode(s) among its lowest {count}; {len(ratios)} named")
@@ -153,7 +144,7 @@ def fit_modal(beam: Beam, gauss: int = 3) -> DampingCoefficients:
     for j, c in enumerate(unknowns):
         # mu reads only the rates (dR/dydot), alpha only the values (dR/dy)
         stiff = bool(np.any(c.mu))
-        A1, E1 = clamped_pencil(_build(bare, elements, gauss, c), rates=stiff,
+        A1, E1 = clamped_pencil(discretize(bare, gauss=gauss, damping=c), rates=stiff,
                                 values=not stiff)
         dlam = (-lam_t * np.einsum("nm,nk,km->m", np.conj(w), E1 - E0, v) if stiff
                 else -np.einsum("nm,nk,km->m", np.conj(w), A1 - A0, v))
@@ -164,11 +155,11 @@ def fit_modal(beam: Beam, gauss: int = 3) -> DampingCoefficients:
     fitted = _combine(unknowns, coef)
     # one correction on the damped pencil (the sensitivities are first order)
     # (the damped modes found near their first-order predictions, not by their rank)
-    got = _ratios_of(bare, elements, gauss, fitted, lam_t + Dl @ coef)
+    got = _ratios_of(discretize(bare, gauss=gauss, damping=fitted), lam_t + Dl @ coef)
     if np.max(np.abs(got - zeta)) > 1e-7:
         coef = np.maximum(coef + np.linalg.lstsq(S, zeta - got, rcond=None)[0], 0.0)
         fitted = _combine(unknowns, coef)
-        got = _ratios_of(bare, elements, gauss, fitted, lam_t + Dl @ coef)
+        got = _ratios_of(discretize(bare, gauss=gauss, damping=fitted), lam_t + Dl @ coef)
     worst = np.max(np.abs(got - zeta))
     if worst > 1e-4 * max(1.0, 100 * np.max(zeta)):
         warnings.warn(f"damping.modal: no non-negative Rayleigh damping gives these ratios "
@@ -180,20 +171,14 @@ def fit_modal(beam: Beam, gauss: int = 3) -> DampingCoefficients:
     return fitted
 
 
-def _build(bare, elements, gauss, coeffs):
-    """The beam's discretization (as fem/discretization.py builds it) with ``coeffs``."""
-    if int(bare.order) == 1:
-        return BeamElements(mesh_beam(bare, elements), gauss, damping=coeffs)
-    return SpectralBeamElements(bare, elements, bare.order, gauss=gauss, damping=coeffs)
-
-
 def _combine(unknowns, coef) -> DampingCoefficients:
     mu = sum(c * u.mu for c, u in zip(coef, unknowns))
     al = sum(c * u.alpha for c, u in zip(coef, unknowns))
     return DampingCoefficients(np.asarray(mu, float), np.asarray(al, float))
 
 
-def _ratios_of(bare, elements, gauss, coeffs, guesses):
-    """Damping ratios of the damped pencil's eigenvalues nearest ``guesses``."""
-    A, E = clamped_pencil(_build(bare, elements, gauss, coeffs))
+def _ratios_of(elements, guesses):
+    """Damping ratios of the eigenvalues of ``elements``' clamped pencil nearest
+    ``guesses``."""
+    A, E = clamped_pencil(elements)
     return _ratios(refine(A, E, guesses))

@@ -84,7 +84,7 @@ def check_equilibrium_exists(model) -> None:
     turbine = model.turbine
     radius = float(turbine.hub.radius) + float(turbine.blade.length)
     floor = ROUNDOFF * model.load_scale() * max(radius, 1.0)
-    trimmed = getattr(model, "_generator_trim", None) is not None
+    trimmed = getattr(model, "generator_trim", None) is not None
     for name, G, K, peak in unbalanced_forces(model):
         if abs(G) <= max(floor, 1e-6 * peak) or abs(K) * math.pi >= abs(G):
             continue

@@ -32,12 +32,10 @@ class GeneratorTrim:
     the unknowns, ``torque`` [N m, HSS] (the current value; the model's controls hold it)."""
 
     def __init__(self, model, index: int):
-        self.model = model
         self.index = int(index)
         self.controls = ControlInputs(model.n_blades, pitch=-float(model.turbine.rotor.pitch),
                                       torque=0.0)
         model.set_controls(self.controls)
-        model.trimmed_torque = 0.0
 
     @property
     def torque(self) -> float:
@@ -45,7 +43,6 @@ class GeneratorTrim:
 
     def set(self, torque: float) -> None:
         self.controls.hold_torque(float(torque))
-        self.model.trimmed_torque = float(torque)
 
     def update(self, mu: float) -> None:
         """Newton's border multiplier: the torque moves by ``-mu``."""
@@ -75,8 +72,8 @@ class GeneratorTrim:
 def generator_trim(model) -> Optional[GeneratorTrim]:
     """A GeneratorTrim when ``model`` (a TurbineModel) has a free generator whose torque
     is to be trimmed (in wind, no controls of its own), else None.  Idempotent: the trim
-    already set up is returned."""
-    existing = getattr(model, "_generator_trim", None)
+    already set up is returned (the model's ``generator_trim``)."""
+    existing = getattr(model, "generator_trim", None)
     if existing is not None:
         return existing
     rigid = getattr(model, "rigid", None)
@@ -85,5 +82,5 @@ def generator_trim(model) -> Optional[GeneratorTrim]:
     if getattr(model, "aero", None) is None or rigid.controls is not None:
         return None
     trim = GeneratorTrim(model, model.layout["generator_azimuth"])
-    model._generator_trim = trim
+    model.generator_trim = trim
     return trim
