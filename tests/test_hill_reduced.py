@@ -123,7 +123,8 @@ def test_strongly_coupled_modes_are_refined_on_the_whole_pencil(nrel_8ms, monkey
         lam, V, tails, H, change, corr = reduced(*args, **kwargs)
         corr = corr.copy()
         corr[:3] = 1.0                    # sorted by frequency: the three lowest
-        marked.extend([lam[:3].copy(), H])
+        if not marked:      # the first basis (the wider one, tried next, refines the same)
+            marked.extend([lam[:3].copy(), H])
         return lam, V, tails, H, change, corr
     monkeypatch.setattr(hill, "reduced_converged_modes", too_coupled)
     got = modes(nrel_8ms, 20.0)

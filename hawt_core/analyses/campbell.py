@@ -54,7 +54,7 @@ from ..results.plotting import mode_label
 from .modal import (DEFAULT_MAX_PER_REV, DEFAULT_STEPS, MAX_STEPS, STEPS_PER_CYCLE,
                     modal_analysis, validate_request)
 
-__all__ = ["campbell", "campbell_in_wind", "campbell_point", "track_modes", "unwrap_harmonics", "check_speeds"]
+__all__ = ["campbell", "campbell_in_wind", "campbell_point", "track_modes", "unwrap_harmonics", "check_speeds", "default_wind_band", "BAND_OVER_SECOND_FLAP"]
 
 
 def _aero_description(turbine, inflow: str, airfoil: str) -> str:
@@ -73,6 +73,13 @@ MIN_MAC = 0.2
 
 #: A vector matched with a MAC below this does not become the track's reference vector.
 KEEP_MAC = 0.95
+
+#: ... unless it is unambiguous: no other MAC of its track or of its mode (in the matrix of
+#: the speed) reaches this share of it.  A sweep in wind changes the pitch by degrees between
+#: points: every shape drifts (NREL 5-MW drivetrain mode, 11 -> 17 m/s: MAC 0.95 between
+#: neighbours but 0.2 against 11 m/s), and a reference held at the last point matched above
+#: KEEP_MAC would lose the track.
+CLEAR_SHARE = 0.8
 
 #: Largest relative frequency change accepted between a track's consecutive points.
 MAX_JUMP = 0.3
@@ -230,7 +237,7 @@ def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
         tracks.append(t)
         return t
 
-    def put(t, i, m, v, mac, off, w):
+    def put(t, i, m, v, mac, off, w, clear=False):
         # off: whole per-rev added to the reported frequency to continue the track (the
         # harmonic re-indexing found by the MAC, accumulated from the track's first point)
         ff = m.get("fixed_frame_per_rev")
@@ -241,9 +248,10 @@ def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
         t["f"] = m["frequency_hz"] + off * w / (2 * np.pi) if np.isfinite(w) else \
             m["frequency_hz"]
         t["w"] = w
-        if not mac < keep_mac:
+        if not mac < keep_mac or clear:
             # a poorly matching vector (two nearly equal multipliers whose eigenvectors mix)
-            # does not replace the track's reference: the next clean speed matches the clean one
+            # does not replace the track's reference: the next clean speed matches the clean
+            # one; a clear match (CLEAR_SHARE) does: the shape drifts along the sweep
             t["vec"], t["off"] = v, off
 
     # harmonic coefficients when every point has them, else the eigenvectors x(0)
@@ -265,27 +273,44 @@ def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
             raise ValueError("campbell: the eigenvectors of different speeds have different "
                              "sizes (same turbine and elements needed)")
         Tv = np.stack([t["vec"] for t in tracks], -1)
-        mac, sh = _mac_shift(Tv, V, max_shift, step)                  # (tracks, modes)
-        off = np.array([t["off"] for t in tracks])[:, None] + sh     # continuing offsets
         ft = np.array([t["f"] for t in tracks])
         fm = np.array([m["frequency_hz"] for m in modes])
         rev = w / (2 * np.pi) if np.isfinite(w) else 0.0
-        cont = fm[None, :] + off * rev                               # continued Hz
         floor = 0.1 * rev if rev > 0 else 1e-3
-        rel = np.abs(cont - ft[:, None]) / np.maximum(np.abs(ft[:, None]), floor)
-        if in_wind and rev > 0:
-            # a sweep in wind moves the rotor speed in large steps: a mode that stays at the
-            # same per-rev (a teeter mode at 1 per-rev) continues its track
-            prev = np.array([t["w"] for t in tracks]) / (2 * np.pi)
-            pr_t = ft / np.where(prev > 0, prev, np.nan)
-            rel_pr = np.abs(cont / rev - pr_t[:, None]) / np.maximum(np.abs(pr_t[:, None]), 0.1)
-            rel = np.fmin(rel, rel_pr)
+
+        def continuation(sh):
+            """(offsets, relative frequency change) of every pairing re-indexed by sh."""
+            off = np.array([t["off"] for t in tracks])[:, None] + sh     # continuing offsets
+            cont = fm[None, :] + off * rev                               # continued Hz
+            rel = np.abs(cont - ft[:, None]) / np.maximum(np.abs(ft[:, None]), floor)
+            if in_wind and rev > 0:
+                # a sweep in wind moves the rotor speed in large steps: a mode that stays at
+                # the same per-rev (a teeter mode at 1 per-rev) continues its track
+                prev = np.array([t["w"] for t in tracks]) / (2 * np.pi)
+                pr_t = ft / np.where(prev > 0, prev, np.nan)
+                rel_pr = (np.abs(cont / rev - pr_t[:, None])
+                          / np.maximum(np.abs(pr_t[:, None]), 0.1))
+                rel = np.fmin(rel, rel_pr)
+            return off, rel
+        mac, sh = _mac_shift(Tv, V, max_shift, step)                  # (tracks, modes)
+        off, rel = continuation(sh)
+        if max_shift:
+            # the reported frequencies follow the motion that names a mode, so a re-indexing
+            # of the vectors' harmonics (the Floquet exponent found one per-rev off: IEA
+            # 15-MW side-side tower, 11 -> 13 m/s) need not move them: the frequency continues
+            # with the offset or without it, whichever is nearer
+            off0, rel0 = continuation(np.zeros_like(sh))
+            plain = rel0 < rel
+            off, rel = np.where(plain, off0, off), np.where(plain, rel0, rel)
         cost = (1.0 - mac) + frequency_weight * np.minimum(rel, 1.0)
         ti, mj = linear_sum_assignment(cost)
         taken = set()
         for a, b in zip(ti, mj):
             if mac[a, b] >= min_mac and rel[a, b] <= max_jump:
-                put(tracks[a], i, modes[b], V[..., b], float(mac[a, b]), int(off[a, b]), w)
+                others = max(np.delete(mac[a], b).max(initial=0.0),
+                             np.delete(mac[:, b], a).max(initial=0.0))
+                put(tracks[a], i, modes[b], V[..., b], float(mac[a, b]), int(off[a, b]), w,
+                    clear=in_wind or bool(others < CLEAR_SHARE * mac[a, b]))
                 taken.add(b)
         for j, m in enumerate(modes):
             if j not in taken:
@@ -309,6 +334,9 @@ def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
         rev_hz = speeds / (2 * np.pi)
         cont = v[:, 0] + sh0
         fixed = np.any(np.isfinite(v[:, 6]))
+        # the fixed frame's curve is made continuous on its own values (a rotating-frame
+        # jump of the naming harmonic need not be one in the fixed frame)
+        sh6 = np.nan_to_num(unwrap_harmonics(speeds, v[:, 6], abscissa=x)) if fixed else sh0
         out.append(Track(label=lab, family=t["family"], symmetry=t["symmetry"],
                          index=t["index"], frequency_per_rev=v[:, 0], frequency_hz=v[:, 1],
                          real_per_rev=v[:, 2], damping_ratio=v[:, 3], mac=v[:, 4],
@@ -317,7 +345,7 @@ def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
                          fixed_frame_per_rev=v[:, 6] if fixed else None,
                          fixed_frame_hz=v[:, 6] * rev_hz if fixed else None,
                          fixed_frame_damping_ratio=v[:, 7] if fixed else None,
-                         fixed_continuous_hz=(v[:, 6] + sh0) * rev_hz if fixed else None,
+                         fixed_continuous_hz=(v[:, 6] + sh6) * rev_hz if fixed else None,
                          whirl=t.get("whirl")))
     _mark_twins(out, speeds)
     return out
@@ -433,8 +461,12 @@ def unwrap_harmonics(speeds: np.ndarray, per_rev: np.ndarray, tol: float = 0.25,
             else:
                 pred_hz = hist[-1][1]
             pred = pred_hz * 2 * np.pi / w
+            last = hist[-1][1] * 2 * np.pi / w          # constant Hz from the last point
             k = float(np.round(pred - f))
-            if k != 0 and abs(f + k - pred) < tol:
+            # a value within tol of the last point's (constant Hz) is not a jump: a linear
+            # prediction over coarse steps (a sweep in wind) would otherwise shift a mode
+            # that merely levels off, and the next prediction run away by a per-rev a step
+            if k != 0 and abs(f + k - pred) < tol and abs(f - last) >= tol:
                 shift[i] = k
         hist.append((xi, (f + shift[i]) * w / (2 * np.pi)))
     return shift
@@ -488,6 +520,25 @@ def _sweep_band(speeds, steps, method, max_hz):
     if not (math.isfinite(float(max_hz)) and float(max_hz) > 0):
         raise ValueError(f"max_hz: {max_hz!r} is not allowed; need a finite number > 0 [Hz]")
     return march, base, float(max_hz)
+
+
+#: The default band of a sweep in wind: this many times the 2nd flap frequency of one blade
+#: clamped on the hub at the sweep's top rotor speed, plus that speed's 1P (the forward
+#: whirl of the 2nd flap in the fixed frame): two flap modes and the first edge mode of every
+#: whirl, the first tower modes and the drivetrain: ~3 Hz for multi-MW turbines (NREL 5-MW
+#: 3.2 Hz, IEA 15-MW 2.6 Hz), as in HAWCStab2's and OpenFAST's Campbell diagrams.
+BAND_OVER_SECOND_FLAP = 1.5
+
+
+def default_wind_band(turbine: Turbine, top_speed: float) -> Optional[float]:
+    """The default band [Hz] of a sweep in wind (BAND_OVER_SECOND_FLAP): None when the
+    blade has fewer than two flap modes among its lowest twelve (the per-rev default then)."""
+    from .blade_modes import blade_modes
+    res = blade_modes(turbine, rotor_speed=float(top_speed), count=12)
+    flap = [m.frequency_hz for m in res.modes if m.family == "flap" and m.frequency_hz > 0]
+    if len(flap) < 2:
+        return None
+    return BAND_OVER_SECOND_FLAP * sorted(flap)[1] + float(top_speed) / (2 * np.pi)
 
 
 def campbell(turbine: Turbine, speeds, elements: Optional[int] = None,
@@ -623,7 +674,8 @@ def campbell_in_wind(turbine: Turbine, wind_speeds, schedule: dict,
     :func:`campbell_point` task on ``executor``; modes tracked along the wind speed.  The
     result's ``speeds`` are the rotor speeds [rad/s] of the points, ``wind_speeds`` the
     wind speeds; ``direction`` [rad]: the wind's yaw misalignment.  Other arguments as
-    :func:`campbell`'s; a point whose operating point or analysis fails is kept with its
+    :func:`campbell`'s, but ``max_hz`` defaults to :func:`default_wind_band` (a few modes
+    per blade family); a point whose operating point or analysis fails is kept with its
     error (``errors="skip"``)."""
     from dataclasses import replace
     from ..aero.wind import Wind
@@ -638,6 +690,8 @@ def campbell_in_wind(turbine: Turbine, wind_speeds, schedule: dict,
         progress(0.0, f"operating points at {winds.size} wind speeds")
     op = operating_points(turbine, winds, schedule, rho=rho).points
     speeds = np.array([p["rotor_speed_rpm"] * np.pi / 30 for p in op])
+    if max_hz is None and np.any(speeds > 0):
+        max_hz = default_wind_band(turbine, float(np.max(speeds)))
     march, base, max_hz = _sweep_band(speeds, steps, method, max_hz)
     tasks, where = [], []
     for i, p in enumerate(op):

@@ -19,7 +19,7 @@ from ..results.modes import Mode
 from ..solvers.floquet import dominant_harmonic
 from ..solvers.multiblade import fixed_frame_modes
 
-__all__ = ['label_modes', 'separate_degenerate_modes', 'add_fixed_frame', 'family_exponent', 'exponent_fields', 'number_modes', 'FAMILY_ROWS', 'TOWER_DIRECTIONS']
+__all__ = ['label_modes', 'separate_degenerate_modes', 'add_fixed_frame', 'family_exponent', 'exponent_fields', 'number_modes', 'mark_overdamped', 'OVERDAMPED_ZETA', 'FAMILY_ROWS', 'TOWER_DIRECTIONS']
 
 
 #: ``symmetry`` of a tower mode: the dominant tower-top motion
@@ -367,12 +367,77 @@ def _blade_symmetry(model: TurbineModel, fl, i: int, eta: complex):
     return "cyclic", phase
 
 
-def number_modes(modes):
-    counts = {}
+#: A structural mode whose (rotating-frame) damping ratio is at least this is overdamped: its
+#: exponent is real to 0.1 % (aerodynamic flap damping beyond critical: IEA 15-MW above
+#: 10 m/s).
+OVERDAMPED_ZETA = 0.999
+
+#: Families whose modes can be overdamped (an inflow or lag state's real exponent is not).
+_STRUCTURAL = ("flap", "lag", "torsion", "axial", "shear", "tower", "drivetrain")
+
+
+def mark_overdamped(modes) -> None:
+    """Mark the overdamped modes (OVERDAMPED_ZETA) and pair their real roots: within a
+    family and symmetry, sorted by decay rate, roots 1 and 2 are one mode's "slow" and
+    "fast" roots, 3 and 4 the next mode's, ...; an odd one out is a "root" (its partner
+    decays beyond the band).  A cyclic mode's real root has no whirl (the fixed frame sees
+    its tilt turn with the rotor at 1P: MBC3's "forward" at 1P): its symmetry becomes
+    "cyclic" ("cyclic-k" for the k-th pair)."""
+    groups: dict = {}
     for m in modes:
-        key = (m.family, m.symmetry)
-        counts[key] = counts.get(key, 0) + 1
-        m.index = counts[key]
+        m.overdamped = None
+        if m.family in _STRUCTURAL and abs(m.real_per_rev) > 0 and \
+                -m.real_per_rev >= OVERDAMPED_ZETA * np.hypot(m.real_per_rev,
+                                                              m.frequency_per_rev):
+            if m.whirl in ("forward", "backward"):
+                m.symmetry = "cyclic" if (m.cyclic_order or 1) == 1 else f"cyclic-{m.cyclic_order}"
+            groups.setdefault((m.family, m.symmetry), []).append(m)
+    for group in groups.values():
+        group.sort(key=lambda m: -m.real_per_rev)
+        for j in range(0, len(group) - 1, 2):
+            group[j].overdamped, group[j + 1].overdamped = "slow", "fast"
+        if len(group) % 2:
+            group[-1].overdamped = "root"
+
+
+def _natural(m) -> float:
+    """A mode's natural frequency [per-rev] (rotating frame): |eta|."""
+    return float(np.hypot(m.real_per_rev, m.frequency_per_rev))
+
+
+def number_modes(modes):
+    """The index of every mode within its family and symmetry, in the order of the natural
+    frequencies |eta| (a heavily damped mode keeps its place although its damped frequency
+    falls below the next one's); an overdamped pair (mark_overdamped) is one mode at the
+    geometric mean of its roots, and a cyclic pair counts in both whirls of its order (its
+    backward and forward members merged into real roots; a root without its partner only
+    in its own group)."""
+    units: list = []                        # (natural, family, symmetry, members)
+    pairs: dict = {}
+    for m in modes:
+        if m.overdamped in ("slow", "fast"):
+            pairs.setdefault((m.family, m.symmetry), []).append(m)
+        else:
+            units.append((_natural(m), m.family, m.symmetry, [m]))
+    for (fam, sym), ms in pairs.items():
+        ms.sort(key=lambda m: -m.real_per_rev)
+        for j in range(0, len(ms) - 1, 2):
+            units.append((float(np.sqrt(_natural(ms[j]) * _natural(ms[j + 1]))), fam, sym,
+                          ms[j:j + 2]))
+    counts: dict = {}
+    # equal natural frequencies (a pair of exponents mirrored about the imaginary axis, the
+    # unstable teeter's; a free yaw angle's double zero, 1e-9 per-rev apart) keep the list's
+    # order: compared to 1e-8 per-rev
+    for _, fam, sym, members in sorted(units, key=lambda u: round(u[0], 8)):
+        keys = [(fam, sym)]
+        if sym and sym.startswith("cyclic") and len(members) == 2:
+            k = sym[len("cyclic"):]
+            keys += [(fam, f"backward-whirl{k}"), (fam, f"forward-whirl{k}")]
+        index = max(counts.get(key, 0) for key in keys) + 1
+        for key in keys:
+            counts[key] = index
+        for m in members:
+            m.index = index
     return modes
 
 
@@ -405,7 +470,9 @@ def add_fixed_frame(model, transform, fl, modes, rows, wts):
         m.fixed_frame_damping_ratio = x["damping_ratio"]
         m.whirl = f.whirl
         m.cyclic_order = f.order
-        if m.family not in ("yaw", "teeter", "tower", "aerodynamic"):
+        # rigid-body, tower and drivetrain modes keep their own symmetry (a drivetrain mode
+        # turns the rotor as a whole: its blades' residual whirl does not name it)
+        if m.family not in ("yaw", "teeter", "tower", "aerodynamic", "drivetrain"):
             sym = _WHIRL_SYMMETRY[f.whirl]
             if f.whirl in ("forward", "backward") and f.order > 1:
                 sym = f"{sym}-{f.order}"

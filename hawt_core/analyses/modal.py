@@ -48,7 +48,8 @@ from ..solvers.multiblade import MultiBladeTransform
 from ..solvers.periodic import PeriodicSteadyState, periodic_steady_state
 from ..solvers.steady import constant_steady_state
 from .labels import (add_fixed_frame, exponent_fields, family_exponent, label_modes,
-                     number_modes, separate_degenerate_modes)
+                     mark_overdamped, number_modes,
+                     separate_degenerate_modes)
 
 __all__ = ["modal_analysis", "periodic_dae", "validate_request", "Cancelled", "METHODS",
            "DEFAULT_STEPS", "DEFAULT_MAX_PER_REV", "STEPS_PER_CYCLE", "MIN_STEPS", "MAX_STEPS",
@@ -452,6 +453,7 @@ def _modal_analysis(turbine, elements, rotor_speed, steps, method, fast, harmoni
         modes.sort(key=lambda m: (m.fixed_frame_per_rev, m.real_per_rev))
     else:
         modes.sort(key=lambda m: (m.frequency_per_rev, m.real_per_rev))
+    mark_overdamped(modes)
     number_modes(modes)
     settings = {"turbine": turbine.name, "elements": model.beam.elements,
                 "order": model.beam.order, "rotor_speed": omega,

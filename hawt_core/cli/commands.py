@@ -210,7 +210,8 @@ def _campbell_args(p):
     p.add_argument("--max-hz", type=finite_float("--max-hz", minimum=0.0, unit="Hz"),
                    default=None, metavar="HZ",
                    help="band [Hz] reported at every speed (default: what the highest speed "
-                        "resolves, 50 per-rev with the default steps)")
+                        "resolves, 50 per-rev with the default steps; with --wind 1.5 x the "
+                        "clamped blade's 2nd flap + 1P, a few modes per blade family)")
     p.add_argument("--all-modes", action="store_true",
                    help="plot every track (default: the Table 2 ones: yaw, teeter and the "
                         "first two of each family and symmetry)")

@@ -61,6 +61,10 @@ class Mode:
     frequency_error: Optional[float] = None
     participation: dict = field(default_factory=dict, repr=False)
     column: int = field(default=-1, repr=False)
+    #: an overdamped mode (a real exponent in the rotating frame: aerodynamic damping beyond
+    #: critical): "slow" or "fast" for the two real roots of a pair that share its index,
+    #: "root" for one without its partner in the band; None for an oscillatory mode
+    overdamped: Optional[str] = None
 
     @property
     def label(self) -> str:
@@ -76,7 +80,7 @@ class Mode:
                 "fixed_frame_hz": self.fixed_frame_hz,
                 "fixed_frame_damping_ratio": self.fixed_frame_damping_ratio,
                 "whirl": self.whirl, "cyclic_order": self.cyclic_order,
-                "frequency_error": self.frequency_error}
+                "frequency_error": self.frequency_error, "overdamped": self.overdamped}
 
 
 @dataclass

@@ -77,8 +77,13 @@ TWIST_AMPLITUDE = math.radians(60.0)
 def mode_label(mode) -> str:
     """'1st antisymmetric flap', 'teeter', 'yaw 2', ... (the paper's figure captions)."""
     if mode.family in ("yaw", "teeter") or not mode.symmetry:
-        return mode.family if mode.index == 1 else f"{mode.family} {mode.index}"
-    return f"{ordinal(mode.index)} {mode.symmetry} {mode.family}"
+        text = mode.family if mode.index == 1 else f"{mode.family} {mode.index}"
+    else:
+        text = f"{ordinal(mode.index)} {mode.symmetry} {mode.family}"
+    root = getattr(mode, "overdamped", None)
+    if root:            # a real root pair: "1st collective flap (overdamped, slow)"
+        text += " (overdamped)" if root == "root" else f" (overdamped, {root})"
+    return text
 
 
 def mode_file_stem(position: int, mode) -> str:

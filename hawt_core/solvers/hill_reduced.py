@@ -219,7 +219,7 @@ class _ModalHill:
 
 
 def reduced_converged_modes(mats: dict, n: int, w: float, band: float, obs, wts, stats: dict,
-                            tol: float, max_harmonics: int):
+                            tol: float, max_harmonics: int, margin: float = BASIS_MARGIN):
     """The exponents of the band 0 <= Im <= ``band``, |Re| <= w (Hill's "converged"
     truncation, see hill._converged_modes) on the averaged system's modal basis: (lam, V
     (2H+1, n, m), tails, H, change, corrections); ``corrections`` (m,): the size of each
@@ -227,10 +227,10 @@ def reduced_converged_modes(mats: dict, n: int, w: float, band: float, obs, wts,
     coordinates) relative to max(|eta|, w): where it exceeds the tolerance, the coupling is
     too strong for the reduction to be trusted (hill.py refines those modes on the whole
     pencil).  ``mats``: {j: (E_j, A_j)} the coefficients' complex
-    harmonics as sparse matrices (hill.coefficient_matrices).  Raises ReductionFailed when
-    the reduction does not apply."""
+    harmonics as sparse matrices (hill.coefficient_matrices); ``margin``: the basis reaches
+    |lambda| <= margin x band.  Raises ReductionFailed when the reduction does not apply."""
     E0, A0 = (sp.csc_matrix(m.real) for m in mats[0])
-    Xr, Yr, lu, sigma = _averaged_modes(A0, E0, BASIS_MARGIN * band, stats)
+    Xr, Yr, lu, sigma = _averaged_modes(A0, E0, margin * band, stats)
     if Xr.shape[1] != Yr.shape[1] or Xr.shape[1] == 0:
         raise ReductionFailed(f"the right and left bases differ ({Xr.shape[1]} vs "
                               f"{Yr.shape[1]} vectors)")

@@ -1,0 +1,186 @@
+"""Campbell diagrams in wind (issue 34, items 3 and 5): overdamped modes named and counted,
+tracks that survive the pitch's drift of every shape, curves without harmonic run-away, the
+default band, and the shipped NREL 5-MW's aeroelastic diagram complete and continuous.
+
+References are stated per test: closed forms of a damped oscillator's roots, synthetic sweeps
+whose assignment is known by construction, the blade's own clamped modes for the band."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from hawt_core.analyses.campbell import (BAND_OVER_SECOND_FLAP, campbell_in_wind,
+                                         default_wind_band, track_modes, unwrap_harmonics)
+from hawt_core.analyses.blade_modes import blade_modes
+from hawt_core.analyses.labels import OVERDAMPED_ZETA, mark_overdamped, number_modes
+from hawt_core.io.catalog import load_any, shipped_controller
+from hawt_core.io.discon import discon_schedule
+from hawt_core.results.modes import Mode
+from hawt_core.results.plotting import mode_label
+
+
+def _mode(family, symmetry, eta, whirl=None, order=None):
+    """A Mode of rotating-frame exponent ``eta`` [per-rev] (rotor speed 1 rad/s)."""
+    return Mode(family=family, symmetry=symmetry, index=0, frequency_per_rev=eta.imag,
+                real_per_rev=eta.real, frequency_hz=eta.imag / (2 * np.pi),
+                damping_ratio=-eta.real / abs(eta), whirl=whirl, cyclic_order=order)
+
+
+def _roots(omega, zeta):
+    """Closed form: the roots of s^2 + 2 zeta omega s + omega^2 (upper one for zeta < 1)."""
+    if zeta < 1:
+        return [complex(-zeta * omega, omega * np.sqrt(1 - zeta ** 2))]
+    d = omega * np.sqrt(zeta ** 2 - 1)
+    return [complex(-zeta * omega + d, 0.0), complex(-zeta * omega - d, 0.0)]
+
+
+def test_overdamped_pairs_are_named_and_keep_the_family_count():
+    """Reference: second-order closed forms.  Collective flap: the 1st mode at 2 per-rev with
+    zeta = 1.5 (two real roots, -0.76 and -5.24 per-rev), the 2nd at 6 per-rev with zeta
+    0.2; cyclic flap: the 1st at 2.2 per-rev, zeta 1.3 (real roots, their backward and
+    forward members merged), the 2nd whirls at 6.3 / 6.5 per-rev; a lone real root (its
+    partner beyond the band); the lightly damped edge modes.  Expected: the real roots named
+    '1st ... (overdamped, slow/fast)' with the index of the mode they stand for, the cyclic
+    pair counted in both whirls (the oscillatory 2nd flap is '2nd backward-whirl' and '2nd
+    forward-whirl', not 1st), the lone root its own group's, the edge modes untouched."""
+    modes = []
+    for r in _roots(2.0, 1.5):
+        modes.append(_mode("flap", "collective", r))
+    modes.append(_mode("flap", "collective", _roots(6.0, 0.2)[0]))
+    for r in _roots(2.2, 1.3):
+        modes.append(_mode("flap", "forward-whirl", r, whirl="forward", order=1))
+    modes.append(_mode("flap", "backward-whirl", _roots(6.3, 0.2)[0], "backward", 1))
+    modes.append(_mode("flap", "forward-whirl", _roots(6.5, 0.2)[0], "forward", 1))
+    modes.append(_mode("torsion", "collective", complex(-40.0, 0.0)))
+    modes.append(_mode("lag", "collective", _roots(3.0, 0.01)[0]))
+    modes.append(_mode("lag", "backward-whirl", _roots(2.9, 0.01)[0], "backward", 1))
+    modes.append(_mode("aerodynamic", "inflow", complex(-3.0, 0.0)))
+    mark_overdamped(modes)
+    number_modes(modes)
+    labels = [mode_label(m) for m in modes]
+    assert labels == ["1st collective flap (overdamped, slow)",
+                      "1st collective flap (overdamped, fast)",
+                      "2nd collective flap",
+                      "1st cyclic flap (overdamped, slow)",
+                      "1st cyclic flap (overdamped, fast)",
+                      "2nd backward-whirl flap", "2nd forward-whirl flap",
+                      "1st collective torsion (overdamped)",
+                      "1st collective lag", "1st backward-whirl lag",
+                      "1st inflow aerodynamic"]
+    assert modes[-1].overdamped is None           # an inflow state's real root is no mode's
+    # the threshold: zeta just below OVERDAMPED_ZETA oscillates, at it is overdamped
+    z = OVERDAMPED_ZETA
+    near = [_mode("flap", "collective", complex(-z * 0.999, np.sqrt(1 - (z * 0.999) ** 2))),
+            _mode("flap", "collective", complex(-1.0, np.sqrt(1 - z ** 2) * 0.99))]
+    mark_overdamped(near)
+    assert [m.overdamped for m in near] == [None, "root"]
+
+
+def test_heavily_damped_mode_keeps_its_index_by_natural_frequency():
+    """Reference: closed forms.  A 1st collective flap at 2 per-rev with zeta 0.95 has the
+    damped frequency 0.62 per-rev, a 2nd at 4 per-rev with zeta 0.99 has 0.56: numbered by
+    damped frequency the 2nd would be the 1st; by natural frequency (|eta|) they keep their
+    order."""
+    a = _mode("flap", "collective", _roots(2.0, 0.95)[0])
+    b = _mode("flap", "collective", _roots(4.0, 0.99)[0])
+    assert b.frequency_per_rev < a.frequency_per_rev
+    number_modes([b, a])
+    assert (a.index, b.index) == (1, 2)
+
+
+def _point(vectors, freqs, labels, speed=1.0, wind=None):
+    return {"speed": speed, "abscissa": speed if wind is None else wind,
+            "modes": [{"label": lab, "family": "flap", "symmetry": "collective", "index": j + 1,
+                       "frequency_per_rev": f / (speed / (2 * np.pi)), "frequency_hz": f,
+                       "real_per_rev": -0.01, "damping_ratio": 0.01}
+                      for j, (f, lab) in enumerate(zip(freqs, labels))],
+            "vectors": np.column_stack(vectors)}
+
+
+def test_a_drifting_shape_keeps_its_track_in_wind():
+    """Reference: a synthetic sweep in wind whose assignment is known by construction: mode A
+    steps a little into a new direction of its own at each of 15 wind speeds
+    (v_k+1 ~ v_k + 0.45 q_k+1, the q orthonormal: MAC 0.83 between neighbours, below
+    KEEP_MAC, and 0.83^k with its first shape: below the refusal threshold from the 10th
+    point on), mode B stays.  The track's reference must follow the latest clear match (in
+    wind every match; elsewhere one no other pairing comes near, CLEAR_SHARE), so A stays
+    one track over all points: a reference held at the first point would refuse the last
+    six (more than a fragment merge restores) and start 'A #2'."""
+    rng = np.random.default_rng(11)
+    Q, _ = np.linalg.qr(rng.normal(size=(40, 17)))
+    b, q = Q[:, 0], Q[:, 1:]
+    v = q[:, 0]
+    pts = []
+    for k in range(15):
+        if k:
+            v = v + 0.45 * q[:, k]
+            v = v / np.linalg.norm(v)
+        pts.append(_point([v, b], [1.0 + 0.01 * k, 2.0], ["A", "B"], speed=1.2,
+                          wind=3.0 + k))
+    first_last = abs(np.vdot(q[:, 0], pts[9]["vectors"][:, 0])) ** 2
+    assert first_last < 0.2
+    tracks = track_modes(pts)
+    assert [t.label for t in tracks] == ["A", "B"]
+    assert all(t.present().all() for t in tracks)
+
+
+def test_unwrap_does_not_run_away_where_a_curve_levels_off():
+    """Reference: a track that drops by 0.137 Hz between two coarse wind steps and then stays
+    at 1.17 Hz (IEA 15-MW 2nd collective flap above rated, 7.52 rpm: 1P = 0.125 Hz): no
+    whole per-rev shift belongs anywhere (the linear prediction from the drop would subtract
+    1P a step); the jumps of the other test (test_campbell.py) are still undone."""
+    speeds = np.full(8, 0.7875)
+    hz = np.array([1.405, 1.419, 1.447, 1.301, 1.164, 1.170, 1.172, 1.173])
+    sh = unwrap_harmonics(speeds, hz * 2 * np.pi / speeds, abscissa=np.arange(8.0) * 2 + 3)
+    np.testing.assert_array_equal(sh, np.zeros(8))
+    jumped = hz * 2 * np.pi / speeds
+    jumped[6] += 2.0
+    sh = unwrap_harmonics(speeds, jumped, abscissa=np.arange(8.0) * 2 + 3)
+    np.testing.assert_array_equal(sh, [0, 0, 0, 0, 0, 0, -2, 0])
+
+
+@pytest.fixture(scope="module")
+def nrel_in_wind():
+    t = load_any("nrel5mw")
+    sched = discon_schedule(shipped_controller("nrel5mw"))
+    return t, campbell_in_wind(t, [5.0, 9.0, 13.0, 17.0, 21.0, 25.0], sched)
+
+
+def test_default_band_is_the_second_flap_and_holds_every_mode_below(nrel_in_wind):
+    """Reference: the blade's own clamped modes at the top rotor speed (blade_modes): the
+    default band is BAND_OVER_SECOND_FLAP x its 2nd flap + 1P (NREL 5-MW: 3.2 Hz); every
+    point reports modes at or below it and at least the 15 modes of the first two flap
+    modes and the first edge mode of every whirl, the two tower modes of each plane's first
+    and the drivetrain (nothing lost in the band)."""
+    turbine, res = nrel_in_wind
+    top = float(np.max(res.speeds))
+    flaps = [m.frequency_hz for m in blade_modes(turbine, rotor_speed=top, count=12).modes
+             if m.family == "flap"]
+    band = BAND_OVER_SECOND_FLAP * sorted(flaps)[1] + top / (2 * np.pi)
+    assert default_wind_band(turbine, top) == pytest.approx(band, rel=1e-12)
+    assert res.settings["max_hz"] == pytest.approx(band, rel=1e-12)
+    assert 2.8 < band < 3.5
+    for p in res.points:
+        f = [m["fixed_frame_hz"] for m in p["modes"]]
+        assert max(f) <= band and len(f) >= 15
+
+
+def test_nrel5mw_wind_sweep_tracks_are_complete_continuous_and_keep_their_labels(
+        nrel_in_wind):
+    """Reference: label continuity across a wind sweep (issue 34): on the shipped NREL 5-MW
+    from 5 to 25 m/s (the rosco schedule's operating points, frozen-wake BEM) every track is
+    found at every wind speed (a mode that vanishes or reappears under a new label fails),
+    no label is repeated with a '#' suffix, each track's points all carry the family and
+    the symmetry of its label, and no fixed-frame curve moves by more than 0.25 Hz between
+    neighbouring wind speeds (4 m/s apart; the largest physical move, the backward-whirl
+    flap's, is 0.14 Hz)."""
+    _, res = nrel_in_wind
+    labels = [t.label for t in res.tracks]
+    assert not [lab for lab in labels if "#" in lab], labels
+    for t in res.tracks:
+        assert t.present().all(), t.label
+        f = t.hz("fixed")
+        assert np.max(np.abs(np.diff(f))) < 0.25, (t.label, f)
+    for i, p in enumerate(res.points):
+        got = {(m["family"], m["symmetry"]) for m in p["modes"]}
+        assert {(t.family, t.symmetry) for t in res.tracks} <= got
