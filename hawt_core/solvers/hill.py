@@ -508,8 +508,13 @@ def _reduced_modes(fc, n: int, w: float, band: float, obs, wts, stats: dict, tol
     mats = coefficient_matrices(fc)
     best = None
     for margin in BASIS_MARGINS:
-        lam, V, tails, H, change, corrections = reduced_converged_modes(
-            mats, n, w, band, obs, wts, stats, tol, MAX_HARMONICS, margin=margin)
+        try:
+            lam, V, tails, H, change, corrections = reduced_converged_modes(
+                mats, n, w, band, obs, wts, stats, tol, MAX_HARMONICS, margin=margin)
+        except ReductionFailed:
+            if best is None:
+                raise
+            break                   # the wider basis does not apply: keep the first one's
         estimate = CORRECTION_TRUST * corrections
         # a heavily damped mode (|Re| > w: an aerodynamically damped flap mode, damping
         # ratio ~0.4 and more) is kept at HEAVY_TOL: refining it on the whole pencil costs a
