@@ -128,7 +128,7 @@ def test_unwrap_does_not_run_away_where_a_curve_levels_off():
     """Reference: a track that drops by 0.137 Hz between two coarse wind steps and then stays
     at 1.17 Hz (IEA 15-MW 2nd collective flap above rated, 7.52 rpm: 1P = 0.125 Hz): no
     whole per-rev shift belongs anywhere (the linear prediction from the drop would subtract
-    1P a step); the jumps of the other test (test_campbell.py) are still undone."""
+    1P a step); nor where it bends below rated; a +2 per-rev slip is still undone."""
     speeds = np.full(8, 0.7875)
     hz = np.array([1.405, 1.419, 1.447, 1.301, 1.164, 1.170, 1.172, 1.173])
     sh = unwrap_harmonics(speeds, hz * 2 * np.pi / speeds, abscissa=np.arange(8.0) * 2 + 3)
@@ -137,6 +137,13 @@ def test_unwrap_does_not_run_away_where_a_curve_levels_off():
     jumped[6] += 2.0
     sh = unwrap_harmonics(speeds, jumped, abscissa=np.arange(8.0) * 2 + 3)
     np.testing.assert_array_equal(sh, [0, 0, 0, 0, 0, 0, -2, 0])
+    # the same mode from 6 to 11 m/s, 1 m/s apart, rotor speed rising to rated (1P 0.088 to
+    # 0.125 Hz): a bend of 0.6-0.9 per-rev a step is physics, not a slip (with a tolerance of
+    # 0.25 per-rev the linear prediction shifted three points by +1, +2, +3 per-rev)
+    speeds = np.array([0.55, 0.59, 0.63, 0.68, 0.74, 0.79])
+    hz = np.array([1.432, 1.447, 1.385, 1.301, 1.209, 1.164])
+    sh = unwrap_harmonics(speeds, hz * 2 * np.pi / speeds, abscissa=np.arange(6.0) + 6)
+    np.testing.assert_array_equal(sh, np.zeros(6))
 
 
 @pytest.fixture(scope="module")
@@ -184,3 +191,17 @@ def test_nrel5mw_wind_sweep_tracks_are_complete_continuous_and_keep_their_labels
     for i, p in enumerate(res.points):
         got = {(m["family"], m["symmetry"]) for m in p["modes"]}
         assert {(t.family, t.symmetry) for t in res.tracks} <= got
+
+
+def test_an_overdamped_pair_reports_its_damping_ratio_and_natural_frequency():
+    """Reference: closed form.  The roots of s^2 + 2 zeta w s + w^2 with w = 2 per-rev,
+    zeta = 1.5 at a rotor speed of 0.8 rad/s: overdamped_pairs must give back zeta (1e-12)
+    and w / 2 pi in Hz (w = 1.6 rad/s), and the mode table's name carries the root."""
+    from hawt_core.results.tables import mode_name, overdamped_pairs
+    modes = [_mode("flap", "collective", r) for r in _roots(2.0, 1.5)]
+    mark_overdamped(modes)
+    number_modes(modes)
+    (a, b, zeta, f0), = overdamped_pairs(modes, 0.8)
+    assert zeta == pytest.approx(1.5, rel=1e-12)
+    assert f0 == pytest.approx(1.6 / (2 * np.pi), rel=1e-12)
+    assert mode_name(a) == "1st collective flap (overdamped, slow)"

@@ -336,7 +336,8 @@ def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
         fixed = np.any(np.isfinite(v[:, 6]))
         # the fixed frame's curve is made continuous on its own values (a rotating-frame
         # jump of the naming harmonic need not be one in the fixed frame)
-        sh6 = np.nan_to_num(unwrap_harmonics(speeds, v[:, 6], abscissa=x)) if fixed else sh0
+        shift6 = unwrap_harmonics(speeds, v[:, 6], abscissa=x) if fixed else None
+        sh6 = np.nan_to_num(shift6) if fixed else sh0
         out.append(Track(label=lab, family=t["family"], symmetry=t["symmetry"],
                          index=t["index"], frequency_per_rev=v[:, 0], frequency_hz=v[:, 1],
                          real_per_rev=v[:, 2], damping_ratio=v[:, 3], mac=v[:, 4],
@@ -346,7 +347,7 @@ def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
                          fixed_frame_hz=v[:, 6] * rev_hz if fixed else None,
                          fixed_frame_damping_ratio=v[:, 7] if fixed else None,
                          fixed_continuous_hz=(v[:, 6] + sh6) * rev_hz if fixed else None,
-                         whirl=t.get("whirl")))
+                         whirl=t.get("whirl"), fixed_shift=shift6))
     _mark_twins(out, speeds)
     return out
 
@@ -431,6 +432,12 @@ def _mark_twins(tracks: list, speeds: np.ndarray) -> None:
                 break
 
 
+#: unwrap_harmonics in a sweep in wind: a shifted value within this many per-rev of the
+#: prediction (a whole-per-rev slip of the reported harmonic lands on it; a physical bend
+#: of the curve does not).
+WIND_UNWRAP_TOL = 0.1
+
+
 def unwrap_harmonics(speeds: np.ndarray, per_rev: np.ndarray, tol: float = 0.25,
                      abscissa=None) -> np.ndarray:
     """Integer per-rev shifts that make a track continuous.
@@ -443,12 +450,18 @@ def unwrap_harmonics(speeds: np.ndarray, per_rev: np.ndarray, tol: float = 0.25,
     brings the value within ``tol`` per-rev of the prediction.  The first value is never
     shifted.  NaN where the track is absent; all zeros when the speeds are unknown.
     ``abscissa``: the sweep's variable (default the speeds; a sweep in wind: the wind
-    speeds), along which the Hz are extrapolated."""
+    speeds), along which the Hz are extrapolated; in a sweep in wind (an abscissa other than
+    the speeds) the shifted value must land within WIND_UNWRAP_TOL instead: few points, a
+    rotor speed that changes the per-rev's size along the sweep and modes that bend sharply
+    near rated make a linear prediction poorer, and a physical drop of 0.6 per-rev (IEA
+    15-MW 2nd collective flap from 7 to 10 m/s, 1P = 0.1 Hz) must not read as a slip."""
     per_rev = np.asarray(per_rev, float)
     shift = np.where(np.isfinite(per_rev), 0.0, np.nan)
     if not np.all(np.isfinite(speeds)):
         return shift
     xs = speeds if abscissa is None else np.asarray(abscissa, float)
+    if abscissa is not None and np.any(xs != speeds):
+        tol = min(tol, WIND_UNWRAP_TOL)
     hist = []                                   # (abscissa, continuous Hz)
     for i, (w, f) in enumerate(zip(speeds, per_rev)):
         if not np.isfinite(f):

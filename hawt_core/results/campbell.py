@@ -54,6 +54,15 @@ class Track:
     #: label of the other member of a real exponent pair with the same frequency (the plot
     #: draws that frequency once); None otherwise
     twin: Optional[str] = None
+    #: the whole per-rev added to the fixed-frame frequency for its continuous curve (the
+    #: fixed frame is unwrapped on its own values); None: ``shift``
+    fixed_shift: Optional[np.ndarray] = field(default=None, repr=False)
+
+    def frame_shift(self, frame: str = "rotating") -> np.ndarray:
+        """The per-rev shifts of the continuous curve in ``frame`` (circled in the plot)."""
+        if frame == "fixed" and self.fixed_shift is not None:
+            return self.fixed_shift
+        return self.shift
 
     def present(self) -> np.ndarray:
         return np.isfinite(self.frequency_hz)

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Optional
 import numpy as np
 
 from ..model import order_text
-from .tables import error_cell, error_note, format_table
+from .tables import error_cell, error_note, format_table, mode_name, overdamped_pairs
 
 if TYPE_CHECKING:
     from ..assembly.turbine import TurbineModel
@@ -164,6 +164,11 @@ class ModalResult:
             footer.append(f"({len(aero)} non-oscillatory modes of the blades' aerodynamic "
                           f"states (inflow, airfoil lag), decay rates {min(decay):.3g} to "
                           f"{max(decay):.3g} 1/s, not listed: --json has them)")
+        w0 = s["rotor_speed"]
+        for a, b, zeta, f0 in (overdamped_pairs(self.modes, w0) if w0 > 0 else ()):
+            footer.append(f"({mode_name(a).split(' (')[0]}: overdamped, real roots "
+                          f"{a.real_per_rev * w0:.4g} and {b.real_per_rev * w0:.4g} 1/s, damping "
+                          f"ratio {zeta:.3g} of an undamped {f0:.4g} Hz)")
         footer.append(f"computed in {self.compute_time:.2f} s")
         return format_table(header, [m for m in self.modes if m.family != "aerodynamic"],
                             footer, unit="Hz" if self.standstill else "per-rev")

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .tables import ordinal
+from .tables import ordinal, overdamped_text
 
 
 def _pyplot():
@@ -80,10 +80,7 @@ def mode_label(mode) -> str:
         text = mode.family if mode.index == 1 else f"{mode.family} {mode.index}"
     else:
         text = f"{ordinal(mode.index)} {mode.symmetry} {mode.family}"
-    root = getattr(mode, "overdamped", None)
-    if root:            # a real root pair: "1st collective flap (overdamped, slow)"
-        text += " (overdamped)" if root == "root" else f" (overdamped, {root})"
-    return text
+    return text + overdamped_text(mode)     # "1st collective flap (overdamped, slow)"
 
 
 def mode_file_stem(position: int, mode) -> str:
@@ -490,7 +487,7 @@ def plot_campbell(result, path, max_hz=None, max_rays: int = 12, tracks="table2"
             continue
         drawn.add(t.label)
         ax.plot(xs, c, ls=ls, marker=mk, ms=3, color=col)
-        shifted = np.nan_to_num(t.shift) != 0
+        shifted = np.nan_to_num(t.frame_shift(frame)) != 0
         if shifted.any():
             ax.plot(xs[shifted], c[shifted], ls="none", marker="o", ms=8, mfc="none", mec=col)
             any_shift = True

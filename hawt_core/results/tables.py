@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ['ordinal', 'mode_name', 'format_table', 'error_cell', 'error_note']
+__all__ = ['ordinal', 'mode_name', 'overdamped_text', 'overdamped_pairs', 'format_table', 'error_cell', 'error_note']
 
 
 def ordinal(k: int) -> str:
@@ -14,11 +14,40 @@ def ordinal(k: int) -> str:
     return {1: "1st", 2: "2nd", 3: "3rd"}.get(k, f"{k}th")
 
 
+def overdamped_text(m) -> str:
+    """' (overdamped, slow)', ' (overdamped, fast)', ' (overdamped)' for the real roots of an
+    overdamped mode (Mode.overdamped), '' otherwise (also for objects without the field)."""
+    root = getattr(m, "overdamped", None)
+    if not root:
+        return ""
+    return " (overdamped)" if root == "root" else f" (overdamped, {root})"
+
+
 def mode_name(m) -> str:
-    """'1st antisymmetric flap', '1st backward-whirl lag', 'teeter', '1st side-side tower'."""
+    """'1st antisymmetric flap', '1st backward-whirl lag', 'teeter', '1st side-side tower',
+    '1st collective flap (overdamped, slow)'."""
     if m.family in ("yaw", "teeter"):
         return m.family
-    return f"{ordinal(m.index)} {(m.symmetry or '')} {m.family}".replace("  ", " ")
+    return (f"{ordinal(m.index)} {(m.symmetry or '')} {m.family}".replace("  ", " ")
+            + overdamped_text(m))
+
+
+def overdamped_pairs(modes, rotor_speed: float) -> list:
+    """[(slow, fast, zeta, natural frequency [Hz])] of the overdamped pairs among ``modes``
+    (real roots -r1, -r2 marked "slow"/"fast" with one family, symmetry and index): the
+    second-order system s^2 + 2 zeta w s + w^2 with those roots has w = sqrt(r1 r2) and
+    zeta = (r1 + r2) / (2 w) >= 1."""
+    slow = [m for m in modes if getattr(m, "overdamped", None) == "slow"]
+    out = []
+    for a in slow:
+        for b in modes:
+            if getattr(b, "overdamped", None) == "fast" and (b.family, b.symmetry, b.index) \
+                    == (a.family, a.symmetry, a.index):
+                r1, r2 = -a.real_per_rev * rotor_speed, -b.real_per_rev * rotor_speed
+                w = float(np.sqrt(r1 * r2))
+                out.append((a, b, (r1 + r2) / (2 * w), w / (2 * np.pi)))
+                break
+    return out
 
 
 def _eigenvalue_text(freq: float, real: float) -> str:
