@@ -145,7 +145,7 @@ with open(sys.argv[1], "rb") as f:
 
   # --- check --------------------------------------------------------------------------------
   if ! "$vpy" -c '
-import rclpy, rclpy.action, rclpy.serialization, mcap, mcap_ros2, openfast_io, Examples
+import rclpy, rclpy.action, rclpy.serialization, mcap, mcap_ros2, Examples
 from hawt_msgs.msg import BladeDeflection, Mode
 from hawt_msgs.srv import ModalAnalysis
 from hawt_msgs.action import ModalAnalysis as ModalAnalysisAction

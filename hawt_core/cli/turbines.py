@@ -34,7 +34,7 @@ def _turbines_args(p):
 
 @command("import", help="convert an OpenFAST deck or a WindIO file into a hawt turbine file",
          description="Read an OpenFAST deck (.fst with its ElastoDyn, BeamDyn, ServoDyn files) "
-                     "with openfast-io, or a WindIO turbine file with windio (validated "
+                     "(any OpenFAST version: read by its keys), or a WindIO turbine file with windio (validated "
                      "against its schema first), and write the hawt turbine file (YAML). What "
                      "is read but not modelled is printed as a warning and kept in the file's "
                      "header.")

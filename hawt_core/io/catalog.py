@@ -7,7 +7,7 @@ file.
 - a short name of a turbine shipped with hawt (``SHIPPED``: ``paper``, ``nrel5mw``,
   ``iea15mw``, ...; :func:`shipped_turbines` lists them with what they are);
 - a path ending in ``.fst``: an OpenFAST deck, imported by :mod:`hawt_core.io.openfast`
-  (needs the optional ``openfast-io``); its warnings are issued as TurbineFileWarning;
+  (any OpenFAST version's layout, read by its keys); its warnings are issued as TurbineFileWarning;
 - a YAML file whose top-level keys are WindIO's (``windIO_version``, ``assembly``,
   ``components``): a WindIO turbine, imported by :mod:`hawt_core.io.windio` (needs the
   optional ``windio``), warnings likewise;

@@ -1,4 +1,5 @@
-"""OpenFAST decks -> hawt turbines, read with the field's own reader (``openfast-io``).
+"""OpenFAST decks -> hawt turbines, every file read by its keys (io/openfast_keys.py), so
+that decks of any OpenFAST version in use (v2.x to v5, and FAST v8 ones) come in.
 
 What is read (all files relative to the ``.fst``):
 
@@ -35,7 +36,6 @@ from __future__ import annotations
 
 import math
 import os
-import re
 from dataclasses import replace
 from pathlib import Path
 
@@ -46,13 +46,14 @@ from ..model import (Beam, BeamDamping, Drivetrain, Gravity, Hub, Nacelle, Rotor
 from .imported import (ELEMENTS, IEC_TO_HAWT, BladeAxis, ImportResult, hub_yaw_share,
                        iec_axes_to_hawt, interp_stations, package_version,
                        sections_from_matrices, untwist_sections)
+from .openfast_keys import (KeyedFile, KeyedFileError, aerodyn_files, beamdyn_blade,
+                            beamdyn_main, read_keyed)
 from .turbine_yaml import TurbineFileError
 
 __all__ = ["ImportResult", "read_openfast", "IMPORTER", "ELEMENTS", "TOWER_STEEL"]
 
 #: Importer name and version written into the header of converted files.
-IMPORTER = (f"hawt {package_version('hawt')} OpenFAST importer "
-            f"(openfast-io {package_version('openfast-io')})")
+IMPORTER = f"hawt {package_version('hawt')} OpenFAST importer (key-based, any version)"
 
 #: Steel-tube assumptions for what an ElastoDyn tower file lacks (torsional rigidity and
 #: section rotary inertia): G/E of steel and E / rho [m^2/s^2] with ElastoDyn's effective
@@ -64,29 +65,17 @@ TOWER_STEEL = {"G_over_E": 80.8 / 210.0, "E_over_rho": 210e9 / 8500.0}
 MAIN = "OpenFAST main"
 
 
-def _need_reader():
-    try:
-        from openfast_io.FAST_reader import InputReader_OpenFAST
-    except ImportError:
-        raise TurbineFileError("openfast", [
-            "reading OpenFAST decks needs the optional package openfast-io: "
-            "pip install 'hawt[turbines]' (or pip install openfast-io)"]) from None
-    return InputReader_OpenFAST
-
-
-def _keyed_lines(path: Path) -> dict:
-    """``{key: (line number, value text)}`` of an OpenFAST ``value  key  - description`` file,
-    to name the key and line of a value the positional reader cannot use."""
-    out = {}
-    try:
-        lines = path.read_text(errors="replace").splitlines()
-    except OSError:
-        return out
-    for i, line in enumerate(lines, 1):
-        tok = line.split()
-        if len(tok) >= 2 and not tok[0].startswith("-"):
-            out.setdefault(tok[1], (i, tok[0]))
-    return out
+#: Keys that older OpenFAST layouts lack, with the value that reproduces what those versions
+#: did (module -> key -> (value, why)).
+LATER_KEYS = {
+    "ElastoDyn": {
+        "PitchDOF": (False, "no blade-pitch DOF before it existed (OpenFAST v4)"),
+        **{f"BlPIner({k})": (0.0, "no pitch-bearing inertia before it existed")
+           for k in (1, 2, 3)},
+        **{f"PBrIner({k})": (0.0, "no pitch-bearing inertia before it existed")
+           for k in (1, 2, 3)},
+    },
+}
 
 
 class _Deck:
@@ -94,10 +83,9 @@ class _Deck:
 
     def __init__(self, fst: Path):
         self.fst = fst
-        self.reader = _need_reader()()
-        self.reader.FAST_InputFile = fst.name
-        self.reader.FAST_directory = str(fst.parent)
-        self.vt = self.reader.fst_vt
+        #: per module, its keys' values (the dictionaries openfast-io's readers fill, and
+        #: under the same names: the importer was written against them)
+        self.vt: dict = {}
         self.warnings: list = []
         self.notes: list = []
         self.sources: dict = {}
@@ -112,29 +100,36 @@ class _Deck:
                 "ElastoDyn", self.fst)), [f"{role} file {name!r} not found (looked for {p})"])
         return p
 
-    def read(self, what: str, path: Path, call):
-        """Run one openfast-io reader; any failure -> TurbineFileError naming the file (and
-        the key and line holding the text it could not convert, when that is why)."""
+    def read_keys(self, what: str, path: Path, fill) -> KeyedFile:
+        """Read ``path`` by its keys (io/openfast_keys.py: any OpenFAST version's layout) and
+        ``fill(keyed_file)`` the reader's dictionaries; a table that does not hold ->
+        TurbineFileError naming the file and line."""
         self.sources[what] = str(path)
         try:
-            call()
-        except Exception as exc:                      # openfast-io raises whatever it meets
-            keys = _keyed_lines(path)
-            # the text openfast-io could not convert, and the key whose value it is
-            bad = re.findall(r"'([^']*)'", str(exc))
-            where = [f"{k} = {v!r} (line {i})" for k, (i, v) in keys.items()
-                     if bad and v == bad[-1]]
-            raise TurbineFileError(str(path), [
-                f"cannot be read as an OpenFAST {what} file by openfast-io "
-                f"({type(exc).__name__}: {exc})"
-                + (f" at {where[0]}" if where else "")
-                + f"; check it against the {what} input format"])
-        self.keys[what] = _keyed_lines(path)
+            kf = read_keyed(path)
+            fill(kf)
+        except KeyedFileError as exc:
+            raise TurbineFileError(str(path), [f"{exc.args[0].split(': ', 1)[-1]}"
+                                               + (f" (line {exc.line})" if exc.line else "")
+                                               + f"; check it against the {what} input format"])
+        self.keys[what] = {k: (kf.lines[k], kf.values[k]) for k in kf.values}
+        return kf
+
+    def _default(self, module: str, key: str, src: dict):
+        """The value of a key older OpenFAST layouts lack (LATER_KEYS), warned once; None
+        for any other missing key."""
+        if key in src or key not in LATER_KEYS.get(module, {}):
+            return src.get(key)
+        value, why = LATER_KEYS[module][key]
+        src[key] = value
+        self.warnings.append(f"{Path(self.sources.get(module, str(self.fst))).name}: {key} "
+                             f"missing (an older OpenFAST layout): taken as {value!r}, {why}")
+        return value
 
     def number(self, module: str, key: str, *, rule: str = "finite", allowed: str = "",
                vt: dict | None = None) -> float:
         src = self.vt[module] if vt is None else vt
-        value = src.get(key)
+        value = self._default(module, key, src)
         file = self.sources.get(module, str(self.fst))
         line = self.keys.get(module, {}).get(key, (None, None))[0]
         at = f" (line {line})" if line else ""
@@ -153,7 +148,7 @@ class _Deck:
         return x
 
     def flag(self, module: str, key: str) -> bool:
-        value = self.vt[module].get(key)
+        value = self._default(module, key, self.vt[module])
         if not isinstance(value, bool):
             raise TurbineFileError(self.sources.get(module, str(self.fst)),
                                    [f"{key} = {value!r}: must be True or False"])
@@ -182,9 +177,22 @@ def _table(deck: _Deck, module: str, keys: tuple, vt: dict) -> dict:
     return out
 
 
+#: The main file's input-file keys whose folders (``*_path``) the importer looks up.
+_FILE_KEYS = ("EDFile", "InflowFile", "AeroFile", "ServoFile", "HydroFile", "SubFile",
+              "MooringFile", "IceFile")
+
+
+def _fill_main(deck: _Deck, kf: KeyedFile) -> None:
+    fst = dict(kf.values)
+    for k in _FILE_KEYS:
+        if isinstance(fst.get(k), str):
+            fst[f"{k}_path"] = os.path.split(fst[k])[0]
+    deck.vt["Fst"] = fst
+
+
 def _main(deck: _Deck):
-    r = deck.reader
-    deck.read(MAIN, deck.fst, r.read_MainInput)
+    # by its keys: every OpenFAST version's main file (openfast-io reads the v5 layout only)
+    deck.read_keys(MAIN, deck.fst, lambda kf: _fill_main(deck, kf))
     fst = deck.vt[MAIN] = deck.vt["Fst"]           # the main file's keys under its role
     comp = {k: fst.get(k) for k in ("CompElast", "CompAero", "CompServo", "CompHydro",
                                     "CompSub", "CompMooring", "CompIce", "CompInflow")}
@@ -282,6 +290,12 @@ def _skew_factor(deck: _Deck, ad: dict, adn: str) -> float:
     return float(factor)
 
 
+def _fill_aerodyn(deck: _Deck, kf: KeyedFile) -> None:
+    """AeroDyn read by its keys (openfast_keys.aerodyn_files) into the deck's dictionaries."""
+    deck.vt["AeroDyn"], deck.vt["AeroDynBlade"] = aerodyn_files(kf)
+    deck.vt["Fst"].setdefault("AeroFile_path", "")
+
+
 def _aerodynamics(deck: _Deck, comp: dict, nb: int, length: float):
     """The AeroDyn blade and airfoil polars (CompAero = 2) as model.Aerodynamics, or None.
     A deck whose AeroDyn files cannot be read still gives its structure: a warning names
@@ -292,7 +306,7 @@ def _aerodynamics(deck: _Deck, comp: dict, nb: int, length: float):
         return None
     try:
         ad_file = deck.path(deck.fst.parent, deck.vt["Fst"]["AeroFile"], "AeroDyn")
-        deck.read("AeroDyn", ad_file, deck.reader.read_AeroDyn)
+        deck.read_keys("AeroDyn", ad_file, lambda kf: _fill_aerodyn(deck, kf))
     except TurbineFileError as exc:
         deck.warnings.append(f"the aerodynamics are not imported: {exc}")
         return None
@@ -448,9 +462,13 @@ def _blade_beamdyn(deck: _Deck, comp: dict, nb: int):
         if comp["CompElast"] == 2:
             raise
         return None
-    deck.read("BeamDyn", bd_main, lambda: deck.reader.read_BeamDyn(str(bd_main), 0))
-    bd = deck.vt["BeamDyn"][0]
-    blade = deck.vt["BeamDynBlade"][0]
+    bd, blade = {}, {}
+    deck.read_keys("BeamDyn", bd_main, lambda kf: bd.update(beamdyn_main(kf)))
+    if not isinstance(bd.get("BldFile"), str):
+        raise TurbineFileError(str(bd_main), [f"BldFile = {bd.get('BldFile')!r}: need the "
+                                              "BeamDyn blade file's name"])
+    deck.read_keys("BeamDyn blade", bd_main.parent / bd["BldFile"],
+                   lambda kf: blade.update(beamdyn_blade(kf)))
     deck.sources["BeamDyn blade"] = os.path.normpath(bd_main.parent / bd["BldFile"])
     kp = np.concatenate([np.column_stack([m["kp_xr"], m["kp_yr"], m["kp_zr"],
                                           m["initial_twist"]]) for m in bd["members"]])
@@ -524,9 +542,12 @@ def _blade(deck: _Deck, comp: dict, ed_file: Path, nb: int, length: float) -> Be
         raise TurbineFileError(str(ed_file), [f"BldFile1..{nb} = {names}: hawt's blades are "
                                               "identical; allowed: one blade file"])
     bfile = deck.path(ed_file.parent, names[0], "ElastoDyn blade")
-    deck.read("ElastoDyn blade", bfile,
-              lambda: deck.reader.read_ElastoDynBlade(str(bfile), 0))
-    vt = deck.vt["ElastoDynBlade"][0]
+    vt = {}
+
+    def fill(kf):
+        vt.update(kf.values)
+        vt.update(kf.table("BlFract", "NBlInpSt"))
+    deck.read_keys("ElastoDyn blade", bfile, fill)
     for k in ("FlStTunr1", "FlStTunr2"):
         deck.number("ElastoDyn blade", k, rule="== 1", vt=vt,
                     allowed="a modal stiffness tuner applies to ElastoDyn's assumed mode "
@@ -582,8 +603,12 @@ def _tower(deck: _Deck, ed_file: Path, flexible: bool) -> Beam | None:
         deck.notes.append("tower: rigid (every tower DOF is False)")
         return None
     tfile = deck.path(ed_file.parent, ed.get("TwrFile"), "ElastoDyn tower")
-    deck.read("ElastoDyn tower", tfile, lambda: deck.reader.read_ElastoDynTower(str(tfile)))
-    vt = deck.vt["ElastoDynTower"]
+    vt = {}
+
+    def fill(kf):
+        vt.update(kf.values)
+        vt.update(kf.table("HtFract", "NTwInpSt"))
+    deck.read_keys("ElastoDyn tower", tfile, fill)
     for k in ("FAStTunr1", "FAStTunr2", "SSStTunr1", "SSStTunr2"):
         deck.number("ElastoDyn tower", k, rule="== 1", vt=vt,
                     allowed="a modal stiffness tuner applies to ElastoDyn's assumed mode "
@@ -644,7 +669,8 @@ def _servodyn(deck: _Deck, comp: dict) -> dict | None:
         return None
     try:
         sd = deck.path(deck.fst.parent, deck.vt["Fst"]["ServoFile"], "ServoDyn")
-        deck.read("ServoDyn", sd, deck.reader.read_ServoDyn)
+        deck.read_keys("ServoDyn", sd, lambda kf: deck.vt.__setitem__("ServoDyn",
+                                                                       dict(kf.values)))
     except TurbineFileError as exc:
         deck.warnings.append(f"ServoDyn not read ({exc}); the yaw spring and damper are 0 "
                              "and no generator-torque controller is assumed")
@@ -677,7 +703,8 @@ def read_openfast(path) -> ImportResult:
     deck = _Deck(fst.resolve())
     comp = _main(deck)
     ed_file = deck.path(deck.fst.parent, deck.vt["Fst"]["EDFile"], "ElastoDyn")
-    deck.read("ElastoDyn", ed_file, lambda: deck.reader.read_ElastoDyn(str(ed_file)))
+    deck.read_keys("ElastoDyn", ed_file, lambda kf: deck.vt.__setitem__("ElastoDyn",
+                                                                         dict(kf.values)))
     ed = deck.vt["ElastoDyn"]
     edn = ed_file.name
     nb = int(deck.number("ElastoDyn", "NumBl", rule="> 0"))
