@@ -202,10 +202,70 @@ UNUSED_REASONS = {
 }
 
 
-def _validate(path: Path):
+#: What windio's v1.0 -> v2.0 converter leaves of a v1 control block and the v2 schema does
+#: not allow, and the v2 keys hawt fills from it: v2 key -> (v1 group, v1 key).
+V1_CONTROL = {"rated_rotor_speed": ("torque", "VS_maxspd"),
+              "min_rotor_speed": ("torque", "VS_minspd"),
+              "optimal_tsr": ("torque", "tsr")}
+
+
+def _from_v1(path: Path, windIO, messages: list) -> dict:
+    """A WindIO 1.x file (no ``windIO_version``) converted by windio's own converter
+    (windIO.converters.windIO2windIO.v1p0_to_v2p0; its messages captured, a component it
+    could not convert refused with its traceback's last line), then its control block
+    completed (V1_CONTROL, rpm as the converter leaves them) and the v1 groups the v2
+    schema does not allow removed, both told in ``messages``."""
+    import contextlib
+    import io
+    import tempfile
+    from windIO.converters.windIO2windIO import v1p0_to_v2p0
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "v2.yaml"
+        log = io.StringIO()
+        try:
+            with contextlib.redirect_stdout(log):
+                v1p0_to_v2p0(str(path), str(out)).convert()
+            data = windIO.load_yaml(out)
+        except Exception as exc:
+            raise TurbineFileError(str(path), [f"a WindIO 1.x file (no windIO_version) that "
+                                               "windio's v1.0 -> v2.0 converter cannot convert "
+                                               f"({type(exc).__name__}: {exc})"]) from None
+    text = log.getvalue()
+    if "Traceback" in text:
+        last = [ln for ln in text.splitlines() if ln.strip()][-3:]
+        raise TurbineFileError(str(path), ["a WindIO 1.x file (no windIO_version) that "
+                                           "windio's v1.0 -> v2.0 converter cannot convert: "
+                                           + " / ".join(ln.strip() for ln in last)])
+    messages.append(f"{path.name}: a WindIO 1.x file (no windIO_version): converted to 2.0 "
+                    "by windio's converter (v1p0_to_v2p0), validated as 2.0 (windio 2.x ships "
+                    "no 1.x schema)")
+    control = data.get("control")
+    if isinstance(control, dict):
+        filled = []
+        for key, (group, old) in V1_CONTROL.items():
+            value = (control.get(group) or {}).get(old) if isinstance(control.get(group),
+                                                                     dict) else None
+            if key not in control and isinstance(value, (int, float)):
+                control[key] = float(value)
+                filled.append(f"control.{key} = {group}.{old} = {value:g}")
+        dropped = [g for g in ("supervisory", "pitch", "torque") if g in control]
+        for g in dropped:
+            control.pop(g)
+        if filled or dropped:
+            messages.append(f"{path.name}: the 1.x control block completed for the 2.0 schema: "
+                            + "; ".join(filled + [f"control.{', control.'.join(dropped)} "
+                                                  "(1.x groups the 2.0 schema does not "
+                                                  "allow) removed" if dropped else ""]).rstrip(
+                                "; "))
+    return data
+
+
+def _validate(path: Path, messages: list | None = None):
     """Load with windIO's loader and validate against its turbine schema; any failure ->
-    TurbineFileError naming the file and the instance path of each schema error."""
+    TurbineFileError naming the file and the instance path of each schema error.  A 1.x
+    file is converted first (_from_v1; what that did is appended to ``messages``)."""
     windIO, jsonschema = _need_windio()
+    messages = [] if messages is None else messages
     try:
         data = windIO.load_yaml(path)
     except Exception as exc:                        # ruamel raises many kinds
@@ -214,6 +274,8 @@ def _validate(path: Path):
     if not isinstance(data, dict):
         raise TurbineFileError(str(path), ["a WindIO turbine file is a mapping of keys "
                                            "(windIO_version, name, assembly, components)"])
+    if "windIO_version" not in data and {"assembly", "components"} <= set(data):
+        data = _from_v1(path, windIO, messages)
     version = str(data.get("windIO_version", ""))
     if version.split(".")[0] not in VERSIONS:
         raise TurbineFileError(str(path), [
@@ -401,7 +463,25 @@ def read_windio(path) -> ImportResult:
     if not p.is_file():
         raise TurbineFileError(str(p), ["file not found"])
     p = p.resolve()
-    f = _File(p, _validate(p))
+    converted: list = []
+    data = _validate(p, converted)
+    try:
+        return _read(p, data, converted)
+    except TurbineFileError as exc:
+        if not converted:
+            raise
+        # a 1.x ontology (WISDEM's input) may lack what WISDEM sizes (the hub's mass)
+        raise TurbineFileError(exc.source, exc.errors + [
+            "(the file is WindIO 1.x, converted to 2.0 by windio's converter: a 1.x turbine "
+            "ontology often leaves the hub and nacelle masses to WISDEM's sizing; give them "
+            "under components.hub.elastic_properties, or import WISDEM's 2.x output)"]) \
+            from None
+
+
+def _read(p: Path, data: dict, converted: list) -> ImportResult:
+    """read_windio's work on the validated data (``converted``: what a 1.x conversion did)."""
+    f = _File(p, data)
+    f.warnings += converted
     f.used.update(("windIO_version", "name", "comments"))     # descriptive, checked above
     name = p.stem
     s = _sign(f)
