@@ -43,6 +43,16 @@ class KeyedFileError(ValueError):
         super().__init__(f"{file}" + (f", line {line}" if line else "") + f": {message}")
 
 
+def _count(kf: "KeyedFile", key: str, minimum: int = 1) -> int:
+    """The integer count ``key`` holds (a table's rows, a list's names), at least
+    ``minimum``; KeyedFileError naming the file, the key and its line otherwise."""
+    value = kf.values.get(key)
+    if not isinstance(value, int) or isinstance(value, bool) or value < minimum:
+        raise KeyedFileError(str(kf.path), kf.lines.get(key),
+                             f"{key} = {value!r}: need an integer >= {minimum}")
+    return value
+
+
 def _convert(text: str):
     low = text.lower()
     if low in ("true", "t"):
@@ -72,11 +82,7 @@ class KeyedFile:
         units line in parentheses, then ``values[count_key]`` rows of numbers): ``{column
         name: [floats]}``.  KeyedFileError naming the file and line where it does not hold."""
         file = str(self.path)
-        count = self.values.get(count_key)
-        if not isinstance(count, int) or isinstance(count, bool) or count < 1:
-            raise KeyedFileError(file, self.lines.get(count_key),
-                                 f"{count_key} = {count!r}: need the table's row count, an "
-                                 "integer >= 1")
+        count = _count(self, count_key)
         start = self.lines.get(count_key, 0)
         for i in range(start, len(self.text)):
             names = self.text[i].split("!")[0].split()       # a trailing comment is no column
@@ -109,11 +115,10 @@ class KeyedFile:
         """The ``values[count_key]`` quoted strings starting on ``key``'s line (AeroDyn's
         AFNames: the first one carries the key, the others stand alone on the next lines)."""
         file = str(self.path)
-        count = self.values.get(count_key)
-        if key not in self.lines or not isinstance(count, int) or count < 1:
-            raise KeyedFileError(file, self.lines.get(count_key),
-                                 f"{count_key} = {count!r} and {key}: need an integer >= 1 "
-                                 f"and that many names from the {key} line on")
+        count = _count(self, count_key)
+        if key not in self.lines:
+            raise KeyedFileError(file, None, f"{key}: {count} names ({count_key}) needed "
+                                             "from its line on, the key is missing")
         out = []
         for j in range(self.lines[key] - 1, len(self.text)):
             m = re.match(r'\s*"([^"]*)"', self.text[j])
@@ -258,10 +263,7 @@ def beamdyn_main(kf: KeyedFile) -> dict:
     and units, count rows), as openfast-io's dictionary."""
     bd = dict(kf.values)
     file = str(kf.path)
-    total = bd.get("member_total")
-    if not isinstance(total, int) or total < 1:
-        raise KeyedFileError(file, kf.lines.get("member_total"),
-                             f"member_total = {total!r}: need an integer >= 1")
+    total = _count(kf, "member_total")
     j = kf.lines.get("kp_total", kf.lines["member_total"])
     members = []
     while len(members) < total and j < len(kf.text):
@@ -293,10 +295,7 @@ def beamdyn_blade(kf: KeyedFile) -> dict:
     numeric rows after the DISTRIBUTED PROPERTIES rule), as openfast-io's dictionary."""
     bl = dict(kf.values)
     file = str(kf.path)
-    n = bl.get("station_total")
-    if not isinstance(n, int) or n < 2:
-        raise KeyedFileError(file, kf.lines.get("station_total"),
-                             f"station_total = {n!r}: need an integer >= 2")
+    n = _count(kf, "station_total", 2)
     for j, line in enumerate(kf.text):
         if line.split()[:1] == ["mu1"]:
             for ln, row in _numeric_rows(kf, j + 1):
