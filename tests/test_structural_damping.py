@@ -94,6 +94,30 @@ def test_proportional_damping_of_a_uniform_cantilever(elements, order):
     assert undamped[flap[0]][1] == pytest.approx(w1, rel=2e-3 if order == 1 else 1e-6)
 
 
+@pytest.mark.parametrize("elements,order", [(24, 1), (4, 5)])
+def test_uniform_mu_on_a_shear_flexible_extensible_cantilever_is_proportional(elements,
+                                                                               order):
+    """Reference: Caughey.  The same mu on all six strains of a Timoshenko cantilever
+    (axial and shear rigidities given: EA, GA as for a real blade section) is C = mu K, so
+    every mode has zeta = mu w / 2 exactly, flap, lag and the shear's effect on them
+    included (1e-6).  The viscous shear force must act on the shear strain rate: before
+    its moment (t x F_d) was in the moment rows, it did work on the slope rate and every
+    bending mode came out with zeta 1.98-1.99 x mu w / 2 (HAWC2's DTU 10-MW blade showed
+    it: the 1st flap at 0.0097 against HAWC2's 0.0048)."""
+    sec = SectionTable.uniform(mass=M_C, i1=2.0, i2=0.5, i3=1.5, gj=1e5, ei2=EI_C,
+                               ei3=4 * EI_C, ea=1e9, ga2=1e7, ga3=2e7)
+    mu = 2e-3
+    plain = _clamped_modes(Beam(L_C, sec, elements, order=order), count=8)
+    damped = _clamped_modes(Beam(L_C, sec, elements, order=order,
+                                 damping=BeamDamping(stiffness=(mu,) * 6)), count=8)
+    bending = [i for i, m in enumerate(plain) if m[0] in ("flap", "lag")][:4]
+    assert len(bending) == 4
+    for i in bending:
+        w = plain[i][1]
+        assert damped[i][1] == pytest.approx(w, rel=1e-9)
+        assert damped[i][2] == pytest.approx(mu * w / 2, rel=1e-6)
+
+
 @pytest.mark.parametrize("order", [1, 4])
 def test_modal_fit_is_rayleigh_through_two_modes_and_elastodyn_rule_for_one(order):
     """(The beam's own mesh does not matter: the fit is on its converged discretization.)"""

@@ -394,7 +394,11 @@ class BeamElements(CellLayout):
         np.add(kFM[:, :, 1], eF, out=c6[..., 3:6])
         c6 *= self._halfh
         if self._muhatT is not None:       # the viscous section loads mu_hat dF/dt
-            FM = FM + yd[:, self._fm_idx].transpose(1, 0, 2) @ self._muhatT
+            FMd = yd[:, self._fm_idx].transpose(1, 0, 2) @ self._muhatT
+            FM = FM + FMd
+            # and the viscous force's moment, t x F_d (gamma x F_d: second order): without
+            # it a shear-flexible section's viscous shear force did work on the slope rate
+            c6[..., 3:6] += self._halfh * np.cross(self._t, FMd[..., 0:3])
         S[:, 0, :, 0:6] += c6 + FM
         S[:, 1, :, 0:6] += c6 - FM
         if capture is not None:

@@ -250,8 +250,20 @@ class SpectralBeamElements(CellLayout):
                                              A6)
         self._Cmu = self._amuT = None
         if mu_hat is not None:
-            self._Cmu = np.einsum("eq,qj,qk,eqab->ejkab", W, dphi, Pq,
-                                  mu_hat.reshape(Ne, Q, 6, 6))
+            mq = mu_hat.reshape(Ne, Q, 6, 6)
+            self._Cmu = np.einsum("eq,qj,qk,eqab->ejkab", W, dphi, Pq, mq)
+            # the viscous force's moment in the moment rows, + int phi_j t x F_d (the
+            # strains' part, gamma x F_d, second order): without it a shear-flexible
+            # section's viscous shear force did work on the slope rate instead of the shear
+            # strain rate (a uniform cantilever with uniform mu: zeta 1.99 x mu w / 2)
+            t = self._t.reshape(Ne, Q, 3)
+            skew = np.zeros((Ne, Q, 3, 3))
+            skew[..., 0, 1], skew[..., 0, 2] = -t[..., 2], t[..., 1]
+            skew[..., 1, 0], skew[..., 1, 2] = t[..., 2], -t[..., 0]
+            skew[..., 2, 0], skew[..., 2, 1] = -t[..., 1], t[..., 0]
+            tF = np.zeros((Ne, Q, 6, 6))
+            tF[..., 3:6, :] = skew @ mq[..., 0:3, :]
+            self._Cmu -= np.einsum("eq,qj,qk,eqab->ejkab", W, Lq, Pq, tF)
         if alpha_mu is not None:
             self._amuT = np.ascontiguousarray(
                 alpha_mu.reshape(Ne, Q, 6, 6).transpose(0, 1, 3, 2))

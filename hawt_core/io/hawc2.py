@@ -1,0 +1,175 @@
+"""HAWC2 models -> hawt: a main body (its ``c2_def`` centre line and Timoshenko ``st`` set)
+as a hawt Beam, with its ``damping_posdef`` Rayleigh damping.
+
+Frames (HAWC2 manual, "main body" and "Structural data"): a blade's main body has z along
+the span and its c2 section frame (x_c2, y_c2) turned about z by the c2_def twist; y points
+to the pressure side, downwind for an upwind rotor (the DTU 10-MW's prebend, upwind, is
+negative c2_def y).  hawt's blade frame has b1 span, b2 in the rotor plane, b3 flapwise
+downwind, so (b1, b2, b3) = (z, x, y); a positive HAWC2 twist (about z, from x towards y) is
+a positive hawt twist (about b1, from b2 towards b3).
+
+A Timoshenko section (st columns TIMOSHENKO_COLUMNS) becomes the 6x6 stiffness and mass of
+hawt's section at the c2 point (the reference line): the strain energy
+
+    EA ea^2 + k_x G A gp2^2 + k_y G A gp3^2 + G I_p k1^2 + E I_x kp2^2 + E I_y kp3^2
+
+with the axial strain ea = g11 + y_e k2 - x_e k3 at the elastic centre, the shear strains
+at the shear centre (g12 - y_sh k1, g13 + x_sh k1) and the curvatures turned into the
+principal bending axes (structural ``pitch`` about z): K = B^T D B.  The mass: m at the mass
+centre (x_cg, y_cg), the radii of gyration ri_x, ri_y about the principal axes through the
+elastic centre, moved to the c2 point (parallel axes through the mass centre).
+
+``damping_posdef mx my mz kx ky kz``: Rayleigh damping of the body, the k-terms stiffness-
+proportional per direction of deformation (x: in-plane, y: out of plane, z: axial and
+torsion), the m-terms mass-proportional per direction of motion: hawt's BeamDamping with
+mu = (kz, kx, ky, kz, ky, kx) on (g11, g12, g13, k1, k2, k3) (bending about b2 is the
+deformation along y) and alpha = (mz, mx, my, mz, my, mx) on (v1, v2, v3, w1, w2, w3).
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..model import Beam, BeamDamping
+from .hawc2_files import TIMOSHENKO_COLUMNS, HawcFileError, read_htc, read_st
+from .imported import BladeAxis, sections_from_matrices, untwist_sections
+from .turbine_yaml import TurbineFileError
+
+__all__ = ["hawc2_body", "timoshenko_matrices"]
+
+
+def timoshenko_matrices(st: dict) -> tuple:
+    """(K, M) (n, 6, 6) in hawt's axes of the c2 section frame (twisted) at the c2 point,
+    from the st columns ``st`` (TIMOSHENKO_COLUMNS -> arrays of n stations)."""
+    n = len(st["r"])
+    a = np.radians(st["pitch"])
+    c, s = np.cos(a), np.sin(a)
+    e2, e3, s2, s3 = st["x_e"], st["y_e"], st["x_sh"], st["y_sh"]
+    B = np.zeros((n, 6, 6))
+    one = np.ones(n)
+    # rows: axial strain at the elastic centre, principal shear strains at the shear
+    # centre, twist rate, principal curvatures; columns: g11, g12, g13, k1, k2, k3
+    B[:, 0, 0], B[:, 0, 4], B[:, 0, 5] = one, e3, -e2
+    B[:, 1, 1], B[:, 1, 2], B[:, 1, 3] = c, s, -c * s3 + s * s2
+    B[:, 2, 1], B[:, 2, 2], B[:, 2, 3] = -s, c, s * s3 + c * s2
+    B[:, 3, 3] = one
+    B[:, 4, 4], B[:, 4, 5] = c, s
+    B[:, 5, 4], B[:, 5, 5] = -s, c
+    E, G, A = st["E"], st["G"], st["A"]
+    D = np.zeros((n, 6, 6))
+    for k, v in enumerate((E * A, st["k_x"] * G * A, st["k_y"] * G * A, G * st["I_p"],
+                           E * st["I_x"], E * st["I_y"])):
+        D[:, k, k] = v
+    K = np.swapaxes(B, 1, 2) @ D @ B
+    m = st["m"]
+    # second moments of the mass about the elastic centre in its principal axes, turned to
+    # (b2, b3), moved to the mass centre and then to the c2 point
+    R = np.zeros((n, 2, 2))
+    R[:, 0, 0], R[:, 0, 1], R[:, 1, 0], R[:, 1, 1] = c, -s, s, c
+    Se = np.zeros((n, 2, 2))
+    Se[:, 0, 0], Se[:, 1, 1] = m * st["ri_y"] ** 2, m * st["ri_x"] ** 2
+    Se = R @ Se @ np.swapaxes(R, 1, 2)
+    cg = np.stack([st["x_cg"], st["y_cg"]], -1)
+    d = cg - np.stack([e2, e3], -1)
+    S = Se - m[:, None, None] * d[:, :, None] * d[:, None, :] \
+        + m[:, None, None] * cg[:, :, None] * cg[:, None, :]
+    M = np.zeros((n, 6, 6))
+    for k in range(3):
+        M[:, k, k] = m
+    c2, c3 = cg[:, 0], cg[:, 1]
+    Sc = np.zeros((n, 3, 3))            # S(c) v = c x v, c = (0, c2, c3)
+    Sc[:, 0, 1], Sc[:, 0, 2] = -c3, c2
+    Sc[:, 1, 0], Sc[:, 2, 0] = c3, -c2
+    M[:, :3, 3:] = -m[:, None, None] * Sc
+    M[:, 3:, :3] = m[:, None, None] * Sc
+    M[:, 3, 3] = S[:, 0, 0] + S[:, 1, 1]
+    M[:, 4, 4], M[:, 5, 5] = S[:, 1, 1], S[:, 0, 0]
+    M[:, 4, 5] = M[:, 5, 4] = -S[:, 0, 1]
+    return K, M
+
+
+def _body(root, name: str, htc: Path):
+    structure = root.block("new_htc_structure")
+    if structure is None:
+        raise TurbineFileError(str(htc), ["no new_htc_structure block"])
+    for blk in structure.blocks:
+        if blk.name == "main_body":
+            cmd = blk.command("name")
+            if cmd is not None and cmd.values and cmd.values[0] == name:
+                return blk
+    names = [b.command("name").values[0] for b in structure.blocks
+             if b.name == "main_body" and b.command("name") is not None]
+    raise TurbineFileError(str(htc), [f"main_body {name!r} not found; the file has "
+                                      f"{', '.join(names) or 'none'}"])
+
+
+def hawc2_body(htc, name: str = "blade1", elements: int = 3, order: int = 6) -> tuple:
+    """(Beam, notes) of the main body ``name`` of the HAWC2 model file ``htc``: its c2_def
+    line (prebend and sweep; the twist turning the sections), its Timoshenko st set
+    (``timoschenko_input``; the FPM 6x6 form is refused) and its ``damping_posdef``.  The
+    stations are the st file's r over its last value, taken as fractions of the span
+    along z."""
+    htc = Path(htc)
+    try:
+        root = read_htc(htc)
+        body = _body(root, name, htc)
+        ti = body.block("timoschenko_input")
+        if ti is None:
+            raise TurbineFileError(str(htc), [f"main_body {name}: no timoschenko_input"])
+        fname, sets = ti.command("filename"), ti.command("set")
+        if fname is None or sets is None or len(sets.values) < 2:
+            raise TurbineFileError(str(htc), [f"main_body {name}: timoschenko_input needs "
+                                              "'filename' and 'set SET SUBSET'"])
+        if ti.command("fpm") is not None and ti.command("fpm").values[:1] == ["1"]:
+            raise TurbineFileError(str(htc), [f"main_body {name}: fpm 1 (a fully populated "
+                                              "6x6 st file) is not read yet; allowed: fpm 0"])
+        # HAWC2 runs from the model's folder, usually the htc folder's parent
+        tried = [(d / fname.values[0]).resolve() for d in (htc.parent.parent, htc.parent)]
+        st_path = next((p for p in tried if p.is_file()), None)
+        if st_path is None:
+            raise TurbineFileError(str(htc), [
+                f"main_body {name}: timoschenko_input filename {fname.values[0]!r} not found "
+                f"(looked for {', '.join(map(str, tried))})"])
+        rows = read_st(st_path, int(float(sets.values[0])), int(float(sets.values[1])))
+        if rows.shape[1] != len(TIMOSHENKO_COLUMNS):
+            raise TurbineFileError(str(st_path), [
+                f"set {sets.values[0]} subset {sets.values[1]}: {rows.shape[1]} columns; a "
+                f"Timoshenko set has {len(TIMOSHENKO_COLUMNS)}"])
+        c2 = body.block("c2_def")
+        if c2 is None:
+            raise TurbineFileError(str(htc), [f"main_body {name}: no c2_def"])
+        secs = np.array([c.numbers(str(htc))[1:5] for c in c2.all("sec")])
+    except HawcFileError as exc:
+        raise TurbineFileError(exc.file, [str(exc).split(": ", 1)[-1]]) from None
+    st = {k: rows[:, j] for j, k in enumerate(TIMOSHENKO_COLUMNS)}
+    r = st["r"]
+    if r[0] != 0 or np.any(np.diff(r) <= 0):
+        raise TurbineFileError(str(st_path), [f"r = {r[:4].tolist()} ...: must start at 0 "
+                                              "and increase"])
+    x, y, z, twist_deg = secs.T
+    if np.any(np.diff(z) <= 0):
+        raise TurbineFileError(str(htc), [f"main_body {name}: c2_def z must increase"])
+    length = float(z[-1] - z[0])
+    # hawt's axes (b1, b2, b3) = (z, x, y); BladeAxis takes IEC (x, y, z) = (b3, -b2, b1)
+    axis = BladeAxis(np.stack([y, -x, z], -1), (z - z[0]) / length)
+    stations, sweep, prebend = axis.stations(r / r[-1])
+    twist = np.radians(np.interp(r / r[-1] * length + z[0], z, twist_deg))
+    K, M = timoshenko_matrices(st)
+    sec = sections_from_matrices(stations, untwist_sections(K, twist),
+                                 untwist_sections(M, twist), prebend=prebend, sweep=sweep)
+    notes = [f"{name}: {len(r)} st stations ({st_path.name} set {sets.values[0]} subset "
+             f"{sets.values[1]}), c2_def line of {len(z)} sections, length {length:.6g} m"]
+    damping = None
+    dp = body.command("damping_posdef")
+    if dp is not None:
+        mx, my, mz, kx, ky, kz = (dp.numbers(str(htc)) + [0.0] * 6)[:6]
+        damping = BeamDamping(stiffness=(kz, kx, ky, kz, ky, kx),
+                              mass=(mz, mx, my, mz, my, mx))
+        notes.append(f"{name}: damping_posdef {mx:g} {my:g} {mz:g} {kx:g} {ky:g} {kz:g} -> "
+                     f"{damping.text()}")
+    for other in ("damping", "damping_aniso"):
+        if body.command(other) is not None:
+            notes.append(f"{name}: {other} read but not modelled (hawt takes damping_posdef)")
+    return Beam(length=length, sections=sec, elements=elements, order=order,
+                damping=damping), notes

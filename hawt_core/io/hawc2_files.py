@@ -1,0 +1,156 @@
+"""HAWC2 input files read as text: the ``.htc`` model file (blocks and commands) and the
+``_st.dat`` structural property files (sets and subsets of section rows).
+
+An htc file is a tree of ``begin NAME; ... end NAME;`` blocks holding commands ``name
+values;``; text after a command's ``;`` is a comment, and so is a line or the rest of a line
+from ``;`` on when no command precedes it.  Commands keep their line numbers for messages.
+An st file holds numbered sets (``#k`` lines) of subsets (``$j n`` lines followed by n rows
+of numbers: 19 columns of a Timoshenko beam, 30 of a fully populated 6x6 one).
+
+Plain text parsing (DTU's ``wetb`` reads these formats too, but brings numba, pandas, h5py,
+paramiko and more with it: not worth it for two formats).
+"""
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Optional
+
+import numpy as np
+
+__all__ = ["HtcBlock", "HtcCommand", "read_htc", "read_st", "HawcFileError",
+           "TIMOSHENKO_COLUMNS"]
+
+#: The columns of a Timoshenko st subset (HAWC2 manual, "Structural data").
+TIMOSHENKO_COLUMNS = ("r", "m", "x_cg", "y_cg", "ri_x", "ri_y", "x_sh", "y_sh", "E", "G",
+                      "I_x", "I_y", "I_p", "k_x", "k_y", "A", "pitch", "x_e", "y_e")
+
+
+class HawcFileError(ValueError):
+    """A HAWC2 file that cannot be read: file, line (or None) and what is wrong."""
+
+    def __init__(self, file: str, line: Optional[int], message: str):
+        self.file, self.line = file, line
+        super().__init__(f"{file}" + (f", line {line}" if line else "") + f": {message}")
+
+
+@dataclass
+class HtcCommand:
+    name: str
+    values: list
+    line: int
+
+    def numbers(self, file: str) -> list:
+        try:
+            return [float(v) for v in self.values]
+        except ValueError:
+            raise HawcFileError(file, self.line, f"{self.name} {' '.join(self.values)}: "
+                                                 "numbers expected") from None
+
+
+@dataclass
+class HtcBlock:
+    name: str
+    line: int
+    commands: list = field(default_factory=list)
+    blocks: list = field(default_factory=list)
+
+    def command(self, name: str) -> Optional[HtcCommand]:
+        """The first command ``name`` of this block (None: absent)."""
+        return next((c for c in self.commands if c.name == name), None)
+
+    def all(self, name: str) -> list:
+        return [c for c in self.commands if c.name == name]
+
+    def block(self, name: str) -> Optional["HtcBlock"]:
+        return next((b for b in self.blocks if b.name == name), None)
+
+    def walk(self):
+        """Every block below this one, depth first."""
+        for b in self.blocks:
+            yield b
+            yield from b.walk()
+
+
+_TOKEN = re.compile(r'"[^"]*"|[^\s;]+')
+
+
+def read_htc(path) -> HtcBlock:
+    """The htc file's block tree under a root block named ``""``."""
+    path = Path(path)
+    try:
+        text = path.read_text(errors="replace").splitlines()
+    except OSError as exc:
+        raise HawcFileError(str(path), None, f"cannot be read ({exc})") from None
+    root = HtcBlock("", 0)
+    stack = [root]
+    for i, raw in enumerate(text, 1):
+        line = raw.split(";", 1)[0]
+        tok = _TOKEN.findall(line)
+        if not tok or tok[0].startswith(("#", ";")):
+            continue
+        word = tok[0].lower()
+        if word == "begin":
+            if len(tok) < 2:
+                raise HawcFileError(str(path), i, "begin without a block name")
+            blk = HtcBlock(tok[1].lower(), i)
+            stack[-1].blocks.append(blk)
+            stack.append(blk)
+        elif word == "end":
+            if len(tok) >= 2 and tok[1].lower() == "exit":
+                break
+            if len(stack) == 1 or (len(tok) >= 2 and tok[1].lower() != stack[-1].name):
+                raise HawcFileError(str(path), i, f"'end {tok[1] if len(tok) > 1 else ''}' "
+                                                  f"does not close 'begin {stack[-1].name}' "
+                                                  f"(line {stack[-1].line})")
+            stack.pop()
+        elif word == "exit":
+            break
+        else:
+            stack[-1].commands.append(HtcCommand(word, [t.strip('"') for t in tok[1:]], i))
+    if len(stack) > 1:
+        raise HawcFileError(str(path), stack[-1].line, f"'begin {stack[-1].name}' is never "
+                                                       "closed")
+    return root
+
+
+def read_st(path, set_no: int, subset_no: int) -> np.ndarray:
+    """The rows (n, columns) of subset ``subset_no`` of set ``set_no`` of an st file."""
+    path = Path(path)
+    try:
+        text = path.read_text(errors="replace").splitlines()
+    except OSError as exc:
+        raise HawcFileError(str(path), None, f"cannot be read ({exc})") from None
+    current = None
+    for i, raw in enumerate(text, 1):
+        tok = raw.split()
+        if not tok:
+            continue
+        if tok[0].startswith("#"):
+            try:
+                current = int(tok[0][1:] or tok[1])
+            except (ValueError, IndexError):
+                current = None
+            continue
+        if tok[0].startswith("$") and current == set_no:
+            try:
+                sub = int(tok[0][1:] or tok[1])
+                n = int(tok[1] if tok[0][1:] else tok[2])
+            except (ValueError, IndexError):
+                raise HawcFileError(str(path), i, f"{raw.strip()!r}: a subset line is "
+                                                  "'$number rows'") from None
+            if sub != subset_no:
+                continue
+            rows = []
+            for j in range(i, min(i + n, len(text))):
+                try:
+                    rows.append([float(x) for x in text[j].split()])
+                except ValueError:
+                    raise HawcFileError(str(path), j + 1, f"set {set_no} subset {subset_no}: "
+                                                          "row of numbers expected") from None
+            if len(rows) < n or len({len(r) for r in rows}) != 1:
+                raise HawcFileError(str(path), i, f"set {set_no} subset {subset_no}: {n} rows "
+                                                  "of one width expected")
+            return np.array(rows)
+    raise HawcFileError(str(path), None, f"set {set_no} subset {subset_no} not found")

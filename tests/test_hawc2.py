@@ -1,0 +1,88 @@
+"""HAWC2 models (issue 35, items 2 and 3, first part): a main body of a HAWC2 model (its
+c2_def line and Timoshenko st set, its damping_posdef) as a hawt beam.
+
+Reference: HAWC2's own eigenanalysis of the DTU 10-MW blade alone, clamped, asserted in
+DTU's h2lib test suite (h2lib_tests 13.2.2103, test_lin.py::test_sys_eig_with_damping;
+tests/data/hawc2/README.md): frequencies 0.610409, 0.930444, 1.739086, 2.762015 Hz and
+damping ratios 0.004826, 0.004758, 0.013395, 0.014198.  The comparison is HAWC2 against
+hawt, not a self-check: the targets of issue 35 are 1 % in frequency and 10 % in damping.
+What remains different: HAWC2 linearizes its 26 bodies of linear Timoshenko elements about
+the blade under gravity with its span horizontal; hawt's p-version elements (converged:
+6 elements give the same to 1e-5) about the unloaded blade."""
+from __future__ import annotations
+
+import warnings
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from hawt_core.analyses.blade_modes import blade_modes
+from hawt_core.io import TurbineFileError
+from hawt_core.io.catalog import load_any
+from hawt_core.io.hawc2 import hawc2_body, timoshenko_matrices
+from hawt_core.io.hawc2_files import TIMOSHENKO_COLUMNS, read_htc, read_st
+
+HTC = Path(__file__).parent / "data" / "hawc2" / "DTU_10_MW" / "htc" / "DTU_10MW_RWT.htc"
+HAWC2_HZ = [0.610409, 0.930444, 1.739086, 2.762015]
+HAWC2_ZETA = [0.004826, 0.004758, 0.013395, 0.014198]
+
+
+def _clamped(beam):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        t = load_any("nrel5mw")
+    t = replace(t, blade=beam, rotor=replace(t.rotor, speed=0.0, precone=0.0),
+                gravity=replace(t.gravity, enabled=False), aerodynamics=None,
+                tower_aerodynamics=None)
+    return blade_modes(t, rotor_speed=0.0, count=6).modes
+
+
+def test_dtu10mw_blade_alone_matches_hawc2s_eigenanalysis():
+    beam, notes = hawc2_body(HTC, "blade1")
+    modes = _clamped(beam)[:4]
+    assert [m.family for m in modes] == ["flap", "lag", "flap", "lag"]
+    f = np.array([m.frequency_hz for m in modes])
+    z = np.array([m.damping_ratio for m in modes])
+    np.testing.assert_allclose(f, HAWC2_HZ, rtol=0.01)        # found +0.62 .. +0.69 %
+    np.testing.assert_allclose(z, HAWC2_ZETA, rtol=0.10)      # found -5.8 .. +4.9 %
+    assert beam.length == pytest.approx(86.3655, abs=1e-9)
+    assert any("damping_posdef" in n for n in notes)
+
+
+def test_the_section_matrices_hold_the_st_files_numbers():
+    """Reference: the st file's own columns.  At a section with the elastic, shear and mass
+    centres on the c2 point and no structural pitch, K and M are diagonal: EA, k_x G A,
+    k_y G A, G I_p, E I_x, E I_y and m, m, m, m (ri_x^2 + ri_y^2), m ri_x^2, m ri_y^2; with
+    offsets, the axial-bending coupling is EA times the elastic centre's offset, and the
+    static moment m times the mass centre's (1e-12)."""
+    st = {k: np.array([v]) for k, v in zip(TIMOSHENKO_COLUMNS, (
+        0.0, 500.0, 0.0, 0.0, 0.6, 0.4, 0.0, 0.0, 1e10, 4e9, 0.5, 2.0, 0.8, 0.5, 0.6, 0.3,
+        0.0, 0.0, 0.0))}
+    K, M = timoshenko_matrices(st)
+    np.testing.assert_allclose(np.diag(K[0]), [3e9, 0.5 * 4e9 * 0.3, 0.6 * 4e9 * 0.3,
+                                               4e9 * 0.8, 0.5e10, 2e10], rtol=1e-12)
+    np.testing.assert_allclose(np.diag(M[0]), [500, 500, 500, 500 * 0.52, 500 * 0.36,
+                                               500 * 0.16], rtol=1e-12)
+    assert np.count_nonzero(K[0] - np.diag(np.diag(K[0]))) == 0
+    st["x_e"], st["y_e"], st["x_cg"], st["y_cg"] = (np.array([v]) for v in (0.1, 0.2,
+                                                                             0.3, -0.1))
+    K, M = timoshenko_matrices(st)
+    assert K[0, 0, 4] == pytest.approx(3e9 * 0.2) and K[0, 0, 5] == pytest.approx(-3e9 * 0.1)
+    assert M[0, 3, 1] == pytest.approx(500 * 0.1) and M[0, 3, 2] == pytest.approx(500 * 0.3)
+
+
+def test_the_readers_name_what_is_wrong(tmp_path):
+    """An unknown body, an unclosed block and a missing st subset are refused with the
+    file (and line) and what is missing."""
+    with pytest.raises(TurbineFileError, match="main_body 'blade7' not found.*blade1"):
+        hawc2_body(HTC, "blade7")
+    bad = tmp_path / "x.htc"
+    bad.write_text("begin new_htc_structure;\n  begin main_body;\n    name blade1;\n")
+    with pytest.raises(Exception, match="line 2.*never closed"):
+        read_htc(bad)
+    st = HTC.parent.parent / "data" / "DTU_10MW_RWT_Blade_st.dat"
+    assert read_st(st, 1, 1).shape == (51, 19)
+    with pytest.raises(Exception, match="set 1 subset 9 not found"):
+        read_st(st, 1, 9)
