@@ -86,3 +86,23 @@ def test_the_readers_name_what_is_wrong(tmp_path):
     assert read_st(st, 1, 1).shape == (51, 19)
     with pytest.raises(Exception, match="set 1 subset 9 not found"):
         read_st(st, 1, 9)
+
+
+def test_what_a_body_holds_and_the_beam_does_not_take_is_named(tmp_path):
+    """Nothing dropped silently: a concentrated mass, an anisotropic damping and an unknown
+    block of the body come back as notes with their lines; nbodies with the mesh used."""
+    text = HTC.read_text()
+    text = text.replace("name        blade1 ;", "name        blade1 ;\n    concentrated_mass 5 0.0 "
+                        "0.0 0.0 100.0 0.0 0.0 0.0 ;\n    damping_aniso 0 0 0 1e-3 1e-3 1e-3 ;"
+                        "\n    begin extra_stuff ;\n    end extra_stuff ;", 1)
+    d = tmp_path / "DTU_10_MW"
+    (d / "htc").mkdir(parents=True)
+    (d / "data").mkdir()
+    (d / "htc" / "m.htc").write_text(text)
+    (d / "data" / "DTU_10MW_RWT_Blade_st.dat").write_text(
+        (HTC.parent.parent / "data" / "DTU_10MW_RWT_Blade_st.dat").read_text())
+    _, notes = hawc2_body(d / "htc" / "m.htc", "blade1")
+    joined = "\n".join(notes)
+    assert "concentrated_mass 5 0.0" in joined and "point masses" in joined
+    assert "damping_aniso" in joined and "block extra_stuff" in joined
+    assert "nbodies 10" in joined and "3 elements of order 6" in joined

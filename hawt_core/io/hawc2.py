@@ -105,7 +105,8 @@ def _body(root, name: str, htc: Path):
 
 
 def hawc2_body(htc, name: str = "blade1", elements: int = 3, order: int = 6) -> tuple:
-    """(Beam, notes) of the main body ``name`` of the HAWC2 model file ``htc``: its c2_def
+    """(Beam, notes) of the main body ``name`` of the HAWC2 model file ``htc`` (the notes
+    also name every command and block of the body that is read but not modelled): its c2_def
     line (prebend and sweep; the twist turning the sections), its Timoshenko st set
     (``timoschenko_input``; the FPM 6x6 form is refused) and its ``damping_posdef``.  The
     stations are the st file's r over its last value, taken as fractions of the span
@@ -168,8 +169,22 @@ def hawc2_body(htc, name: str = "blade1", elements: int = 3, order: int = 6) -> 
                               mass=(mz, mx, my, mz, my, mx))
         notes.append(f"{name}: damping_posdef {mx:g} {my:g} {mz:g} {kx:g} {ky:g} {kz:g} -> "
                      f"{damping.text()}")
-    for other in ("damping", "damping_aniso"):
-        if body.command(other) is not None:
-            notes.append(f"{name}: {other} read but not modelled (hawt takes damping_posdef)")
+    # what the body says that the beam does not take: named, never dropped silently
+    read = {"name", "type", "nbodies", "node_distribution", "damping_posdef"}
+    why = {"damping": "hawt takes damping_posdef", "damping_aniso": "hawt takes damping_posdef",
+           "concentrated_mass": "point masses on a body are not modelled yet",
+           "gravity": "hawt's gravity is the turbine's"}
+    for cmd in body.commands:
+        if cmd.name in read:
+            continue
+        notes.append(f"{name}: {cmd.name} {' '.join(cmd.values)} (line {cmd.line}) read but "
+                     "not modelled" + (f" ({why[cmd.name]})" if cmd.name in why else ""))
+    if body.command("nbodies") is not None:
+        notes.append(f"{name}: nbodies {' '.join(body.command('nbodies').values)}: HAWC2's "
+                     f"discretization; hawt meshes the beam with {elements} elements of "
+                     f"order {order}")
+    for blk in body.blocks:
+        if blk.name not in ("timoschenko_input", "c2_def"):
+            notes.append(f"{name}: block {blk.name} (line {blk.line}) read but not modelled")
     return Beam(length=length, sections=sec, elements=elements, order=order,
                 damping=damping), notes
