@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from ..model import Beam, BeamDamping
-from .hawc2_files import TIMOSHENKO_COLUMNS, HawcFileError, read_htc, read_st
+from .hawc2_files import TIMOSHENKO_COLUMNS, HawcFileError, model_folder, read_htc, read_st
 from .imported import BladeAxis, sections_from_matrices, untwist_sections
 from .turbine_yaml import TurbineFileError
 
@@ -126,7 +126,7 @@ def hawc2_body(htc, name: str = "blade1", elements: int = 3, order: int = 6) -> 
             raise TurbineFileError(str(htc), [f"main_body {name}: fpm 1 (a fully populated "
                                               "6x6 st file) is not read yet; allowed: fpm 0"])
         # HAWC2 runs from the model's folder, usually the htc folder's parent
-        tried = [(d / fname.values[0]).resolve() for d in (htc.parent.parent, htc.parent)]
+        tried = [(d / fname.values[0]).resolve() for d in (model_folder(htc), htc.parent)]
         st_path = next((p for p in tried if p.is_file()), None)
         if st_path is None:
             raise TurbineFileError(str(htc), [

@@ -20,7 +20,7 @@ from typing import Optional
 import numpy as np
 
 __all__ = ["HtcBlock", "HtcCommand", "read_htc", "read_st", "HawcFileError",
-           "TIMOSHENKO_COLUMNS"]
+           "TIMOSHENKO_COLUMNS", "model_folder"]
 
 #: The columns of a Timoshenko st subset (HAWC2 manual, "Structural data").
 TIMOSHENKO_COLUMNS = ("r", "m", "x_cg", "y_cg", "ri_x", "ri_y", "x_sh", "y_sh", "E", "G",
@@ -76,16 +76,47 @@ class HtcBlock:
 _TOKEN = re.compile(r'"[^"]*"|[^\s;]+')
 
 
-def read_htc(path) -> HtcBlock:
-    """The htc file's block tree under a root block named ``""``."""
-    path = Path(path)
+def model_folder(htc: Path) -> Path:
+    """The folder HAWC2 runs a model from (its relative paths' base): the htc folder's
+    parent when the htc file sits in a folder named ``htc``, else the htc file's folder."""
+    htc = Path(htc).resolve()
+    return htc.parent.parent if htc.parent.name.lower() == "htc" else htc.parent
+
+
+def _lines(path: Path, base: Path, depth: int = 0) -> list:
+    """(file, line number, text) of ``path`` with every ``continue_in_file`` expanded in
+    place (paths relative to the model folder ``base``)."""
+    if depth > 20:
+        raise HawcFileError(str(path), None, "continue_in_file nested more than 20 deep")
     try:
         text = path.read_text(errors="replace").splitlines()
     except OSError as exc:
         raise HawcFileError(str(path), None, f"cannot be read ({exc})") from None
+    out = []
+    for i, raw in enumerate(text, 1):
+        tok = _TOKEN.findall(raw.split(";", 1)[0])
+        if depth and tok and tok[0].lower() == "exit":
+            break                           # an included file returns to its includer
+        if tok and tok[0].lower() == "continue_in_file":
+            if len(tok) < 2:
+                raise HawcFileError(str(path), i, "continue_in_file without a file name")
+            target = (base / tok[1].strip('"')).resolve()
+            if not target.is_file():
+                raise HawcFileError(str(path), i, f"continue_in_file {tok[1]}: not found "
+                                                  f"(looked for {target})")
+            out += _lines(target, base, depth + 1)
+            continue
+        out.append((str(path), i, raw))
+    return out
+
+
+def read_htc(path) -> HtcBlock:
+    """The htc file's block tree under a root block named ``""`` (``continue_in_file``
+    expanded; the commands keep their own file's line numbers)."""
+    path = Path(path)
     root = HtcBlock("", 0)
     stack = [root]
-    for i, raw in enumerate(text, 1):
+    for file, i, raw in _lines(path, model_folder(path)):
         line = raw.split(";", 1)[0]
         tok = _TOKEN.findall(line)
         if not tok or tok[0].startswith(("#", ";")):
@@ -93,7 +124,7 @@ def read_htc(path) -> HtcBlock:
         word = tok[0].lower()
         if word == "begin":
             if len(tok) < 2:
-                raise HawcFileError(str(path), i, "begin without a block name")
+                raise HawcFileError(file, i, "begin without a block name")
             blk = HtcBlock(tok[1].lower(), i)
             stack[-1].blocks.append(blk)
             stack.append(blk)
@@ -101,7 +132,7 @@ def read_htc(path) -> HtcBlock:
             if len(tok) >= 2 and tok[1].lower() == "exit":
                 break
             if len(stack) == 1 or (len(tok) >= 2 and tok[1].lower() != stack[-1].name):
-                raise HawcFileError(str(path), i, f"'end {tok[1] if len(tok) > 1 else ''}' "
+                raise HawcFileError(file, i, f"'end {tok[1] if len(tok) > 1 else ''}' "
                                                   f"does not close 'begin {stack[-1].name}' "
                                                   f"(line {stack[-1].line})")
             stack.pop()
