@@ -133,3 +133,31 @@ def test_iea15mw_blade_from_hawc2_is_the_windio_blade():
     assert [m.family for m in got] == [m.family for m in want]
     np.testing.assert_allclose([m.frequency_hz for m in got],
                                [m.frequency_hz for m in want], rtol=5e-3)
+
+
+def test_dtu10mw_aerodynamics_from_the_ae_and_pc_files():
+    """The aero block (ae_sets, ae and pc files, the linked body's c2_def twist).
+    References: the ae file's own chord column (exact); a station whose thickness is a pc
+    table's (24.1 %) has exactly that table; a thickness between two tables has the
+    linear interpolation between them (closed form at a shared angle, 1e-12); the twist is
+    the c2_def twist at the root (-14.5 deg); HAWC2's model options named as not taken."""
+    from hawt_core.io.hawc2 import hawc2_aerodynamics, thickness_polar
+    from hawt_core.io.hawc2_files import read_ae, read_pc
+    data = HTC.parent.parent / "data"
+    aero, notes = hawc2_aerodynamics(HTC)
+    ae = read_ae(data / "DTU_10MW_RWT_ae.dat", 1)
+    np.testing.assert_array_equal(aero.chord, ae[:, 1])
+    assert aero.stations[0] == 0.0 and aero.stations[-1] == 1.0
+    assert np.degrees(aero.twist[0]) == pytest.approx(-14.5, abs=1e-12)
+    tables = read_pc(data / "DTU_10MW_RWT_pc.dat", 1)
+    tip = aero.polars[aero.airfoil[-1]]
+    t241 = next(r for t, _, r in tables if t == 24.1)
+    assert ae[-1, 2] == 24.1
+    np.testing.assert_array_equal(tip.cl, t241[:, 1])
+    np.testing.assert_allclose(np.degrees(tip.alpha), t241[:, 0], rtol=1e-14, atol=1e-12)
+    t301 = next(r for t, _, r in tables if t == 30.1)
+    alpha, cl, cd, cm = thickness_polar(tables, 27.1)
+    k = int(np.flatnonzero(alpha == 0.0)[0])
+    mid = 0.5 * (np.interp(0.0, t241[:, 0], t241[:, 1]) + np.interp(0.0, t301[:, 0], t301[:, 1]))
+    assert cl[k] == pytest.approx(mid, rel=1e-12)
+    assert any("dynstall_method" in n and "not taken" in n for n in notes)

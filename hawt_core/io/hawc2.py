@@ -31,12 +31,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ..model import Beam, BeamDamping
-from .hawc2_files import TIMOSHENKO_COLUMNS, HawcFileError, model_folder, read_htc, read_st
+from ..model import Aerodynamics, Beam, BeamDamping, Polar
+from .hawc2_files import (TIMOSHENKO_COLUMNS, HawcFileError, model_folder, read_ae, read_htc,
+                          read_pc, read_st)
 from .imported import BladeAxis, sections_from_matrices, untwist_sections
 from .turbine_yaml import TurbineFileError
 
-__all__ = ["hawc2_body", "timoshenko_matrices"]
+__all__ = ["hawc2_body", "hawc2_aerodynamics", "timoshenko_matrices", "thickness_polar"]
 
 
 def timoshenko_matrices(st: dict) -> tuple:
@@ -188,3 +189,84 @@ def hawc2_body(htc, name: str = "blade1", elements: int = 3, order: int = 6) -> 
             notes.append(f"{name}: block {blk.name} (line {blk.line}) read but not modelled")
     return Beam(length=length, sections=sec, elements=elements, order=order,
                 damping=damping), notes
+
+
+def thickness_polar(tables: list, thickness: float) -> tuple:
+    """(alpha [deg], cl, cd, cm) at relative ``thickness`` [%] from a pc set's ``tables``
+    [(thickness, name, rows)]: HAWC2's rule, linear in thickness between the two tables
+    that bracket it (each on the union of their angles), the nearest table beyond the
+    thinnest and thickest."""
+    tabs = sorted(tables, key=lambda t: t[0])
+    ts = np.array([t[0] for t in tabs])
+    if thickness <= ts[0]:
+        r = tabs[0][2]
+        return r[:, 0], r[:, 1], r[:, 2], r[:, 3]
+    if thickness >= ts[-1]:
+        r = tabs[-1][2]
+        return r[:, 0], r[:, 1], r[:, 2], r[:, 3]
+    j = int(np.searchsorted(ts, thickness))
+    (t0, _, a), (t1, _, b) = tabs[j - 1], tabs[j]
+    w = (thickness - t0) / (t1 - t0)
+    alpha = np.union1d(a[:, 0], b[:, 0])
+    alpha = alpha[(alpha >= max(a[0, 0], b[0, 0])) & (alpha <= min(a[-1, 0], b[-1, 0]))]
+    out = [alpha]
+    for c in (1, 2, 3):
+        out.append((1 - w) * np.interp(alpha, a[:, 0], a[:, c])
+                   + w * np.interp(alpha, b[:, 0], b[:, c]))
+    return tuple(out)
+
+
+def hawc2_aerodynamics(htc, blade: int = 1) -> tuple:
+    """(Aerodynamics, notes) of the htc file's ``aero`` block: the ae set of blade
+    ``blade`` (radius, chord, relative thickness, pc set), its polars interpolated in
+    thickness at every station as HAWC2 does (thickness_polar; one polar per distinct
+    thickness), the aerodynamic twist from the linked body's c2_def (hawt's sign: the
+    structural twist's), stations as fractions of the ae radius's last value.  HAWC2's
+    model options (induction, tip loss, dynamic stall, aerosections) are named in the notes
+    as read but not taken: hawt's aerodynamics are its own."""
+    htc = Path(htc)
+    try:
+        root = read_htc(htc)
+        aero = root.block("aero")
+        if aero is None:
+            raise TurbineFileError(str(htc), ["no aero block"])
+        need = {k: aero.command(k) for k in ("ae_filename", "pc_filename", "ae_sets")}
+        missing = [k for k, v in need.items() if v is None or not v.values]
+        if missing:
+            raise TurbineFileError(str(htc), [f"aero: {', '.join(missing)} missing"])
+        link = next((c for c in aero.all("link") if c.values[:1] == [str(blade)]), None)
+        if link is None or len(link.values) < 3:
+            raise TurbineFileError(str(htc), [f"aero: no 'link {blade} mbdy_c2_def BODY'"])
+        base = model_folder(htc)
+        ae_set = int(float(need["ae_sets"].values[min(blade, len(need["ae_sets"].values)) - 1]))
+        ae = read_ae(base / need["ae_filename"].values[0], ae_set)
+        pc_path = base / need["pc_filename"].values[0]
+        sets = {int(p) for p in ae[:, 3]}
+        pcs = {k: read_pc(pc_path, k) for k in sets}
+        body = _body(root, link.values[2], htc)
+        c2 = body.block("c2_def")
+        secs = np.array([c.numbers(str(htc))[1:5] for c in c2.all("sec")])
+    except HawcFileError as exc:
+        raise TurbineFileError(exc.file, [str(exc).split(": ", 1)[-1]]) from None
+    r, chord, thick, pcset = ae.T
+    z, twist_deg = secs[:, 2], secs[:, 3]
+    stations = r / r[-1]
+    twist = np.radians(np.interp(stations * (z[-1] - z[0]) + z[0], z, twist_deg))
+    polars, index, key_of = [], [], {}
+    for t, k in zip(thick, pcset.astype(int)):
+        key = (k, round(float(t), 6))
+        if key not in key_of:
+            alpha, cl, cd, cm = thickness_polar(pcs[k], float(t))
+            key_of[key] = len(polars)
+            polars.append(Polar(name=f"pc{k}_t{t:g}", alpha=np.radians(alpha), cl=cl, cd=cd,
+                                cm=cm, thickness=float(t) / 100.0))
+        index.append(key_of[key])
+    notes = [f"aerodynamics: {len(r)} ae stations (set {ae_set}), {len(polars)} polars "
+             f"interpolated in thickness from pc set(s) {sorted(sets)}"]
+    for cmd in aero.commands:
+        if cmd.name not in ("nblades", "link", "ae_filename", "pc_filename", "ae_sets",
+                            "hub_vec"):
+            notes.append(f"aero: {cmd.name} {' '.join(cmd.values)} (line {cmd.line}) read but "
+                         "not taken (hawt's own aerodynamic models: docs/aerodynamics.md)")
+    return Aerodynamics(stations=stations, chord=chord, twist=twist,
+                        airfoil=np.array(index), polars=tuple(polars)), notes

@@ -19,8 +19,8 @@ from typing import Optional
 
 import numpy as np
 
-__all__ = ["HtcBlock", "HtcCommand", "read_htc", "read_st", "HawcFileError",
-           "TIMOSHENKO_COLUMNS", "model_folder"]
+__all__ = ["HtcBlock", "HtcCommand", "read_htc", "read_st", "read_ae", "read_pc",
+           "HawcFileError", "TIMOSHENKO_COLUMNS", "model_folder"]
 
 #: The columns of a Timoshenko st subset (HAWC2 manual, "Structural data").
 TIMOSHENKO_COLUMNS = ("r", "m", "x_cg", "y_cg", "ri_x", "ri_y", "x_sh", "y_sh", "E", "G",
@@ -185,3 +185,74 @@ def read_st(path, set_no: int, subset_no: int) -> np.ndarray:
                                                   "of one width expected")
             return np.array(rows)
     raise HawcFileError(str(path), None, f"set {set_no} subset {subset_no} not found")
+
+
+def _numbers(text: list, i: int, path: Path, what: str) -> list:
+    """The numbers of line ``i`` (0-based) before a ``;`` or ``!`` comment."""
+    if i >= len(text):
+        raise HawcFileError(str(path), None, f"{what}: the file ends early")
+    tok = re.split(r"[;!]", text[i], maxsplit=1)[0].split()
+    out = []
+    for t in tok:
+        try:
+            out.append(float(t))
+        except ValueError:
+            break                       # a name after the numbers (a pc table's airfoil)
+    return out
+
+
+def read_ae(path, set_no: int) -> np.ndarray:
+    """Set ``set_no`` of an ae file: rows (radius [m], chord [m], thickness [%], pc set)."""
+    path = Path(path)
+    try:
+        text = path.read_text(errors="replace").splitlines()
+    except OSError as exc:
+        raise HawcFileError(str(path), None, f"cannot be read ({exc})") from None
+    nsets = int(_numbers(text, 0, path, "the number of sets")[0])
+    i = 1
+    for k in range(1, nsets + 1):
+        head = _numbers(text, i, path, f"set {k}'s header")
+        if len(head) < 2:
+            raise HawcFileError(str(path), i + 1, f"set {k}: 'set rows' expected")
+        n = int(head[1])
+        rows = [_numbers(text, i + 1 + j, path, f"set {k} row {j + 1}") for j in range(n)]
+        if any(len(r) < 4 for r in rows):
+            bad = next(j for j, r in enumerate(rows) if len(r) < 4)
+            raise HawcFileError(str(path), i + 2 + bad, f"set {k}: radius, chord, thickness "
+                                                        "and pc set expected")
+        if int(head[0]) == set_no:
+            return np.array([r[:4] for r in rows])
+        i += 1 + n
+    raise HawcFileError(str(path), None, f"ae set {set_no} not found ({nsets} sets)")
+
+
+def read_pc(path, set_no: int) -> list:
+    """Set ``set_no`` of a pc file: [(thickness [%], name, rows (n, 4): alpha [deg], cl, cd,
+    cm)] in the file's order."""
+    path = Path(path)
+    try:
+        text = path.read_text(errors="replace").splitlines()
+    except OSError as exc:
+        raise HawcFileError(str(path), None, f"cannot be read ({exc})") from None
+    nsets = int(_numbers(text, 0, path, "the number of sets")[0])
+    i = 1
+    for k in range(1, nsets + 1):
+        ntab = int(_numbers(text, i, path, f"set {k}'s table count")[0])
+        i += 1
+        tables = []
+        for _ in range(ntab):
+            head = _numbers(text, i, path, f"set {k}'s table header")
+            if len(head) < 3:
+                raise HawcFileError(str(path), i + 1, "a pc table header is 'number rows "
+                                                      "thickness [name]'")
+            n = int(head[1])
+            name = " ".join(text[i].split()[3:])
+            rows = [_numbers(text, i + 1 + j, path, f"table row {j + 1}") for j in range(n)]
+            if any(len(r) < 4 for r in rows):
+                bad = next(j for j, r in enumerate(rows) if len(r) < 4)
+                raise HawcFileError(str(path), i + 2 + bad, "alpha, cl, cd, cm expected")
+            tables.append((head[2], name, np.array([r[:4] for r in rows])))
+            i += 1 + n
+        if k == set_no:
+            return tables
+    raise HawcFileError(str(path), None, f"pc set {set_no} not found ({nsets} sets)")
