@@ -17,6 +17,7 @@ The two hawt columns are the same model with two formats of the same data (a con
 check of the import); against HAWCStab2 the model differences are the elastic blade
 (HAWCStab2's operating points are aeroelastic: flap deflection and blade torsion under load,
 which unload the rotor above rated by several degrees of effective pitch) and the tilt.
+Then like for like: hawt's aeroelastic steady state at the same points.
 
     PYTHONPATH=. .venv/bin/python bench/hawc2_operating_points.py [--data DIR]
 """
@@ -86,6 +87,31 @@ def main() -> None:
               f"{pa:8.0f} {100 * (pa / P - 1):+6.1f}% | {T:7.0f} {th:7.0f} "
               f"{100 * (th / T - 1):+6.1f}% {ta:7.0f} {100 * (ta / T - 1):+6.1f}%")
     print(f"HAWC2 ae/pc against AeroDyn, same BEM: largest difference {100 * worst:.2f} %")
+    # like for like: hawt's aeroelastic steady state (assembly/aero_blade.py: the blade on
+    # the spinning hub, BEM at its Gauss points) at the same points, with the HAWC2
+    # aerodynamics on the shipped structure (ElastoDyn + BeamDyn blade) and on the HAWC2
+    # model's own blade (io/hawc2.py hawc2_body)
+    from hawt_core.assembly.aero_blade import AeroelasticBlade
+    from hawt_core.io.hawc2 import hawc2_body
+    blade, _ = hawc2_body(htc, "blade1")
+    cases = {"shipped blade": replace(ship, aerodynamics=aero),
+             "HAWC2 blade": replace(ship, aerodynamics=aero, blade=blade)}
+    print(f"\naeroelastic steady state, HAWC2 aerodynamics: {'U':>5} | P HS2, hawt (diff) "
+          "and T HS2, hawt (diff) per structure; tip flap deflection [m]")
+    for name, t0 in cases.items():
+        print(f"  {name}")
+        y = None
+        for U, pitch, rpm, P, T in opt:
+            if U < 3.0:
+                continue
+            om = rpm * np.pi / 30.0
+            t = replace(t0, rotor=replace(t0.rotor, speed=om, pitch=-np.radians(pitch)))
+            m = AeroelasticBlade(t, U)
+            y = m.steady_state(y0=y if y is not None and y.size == m.n else None)
+            torque, thrust = m.root_loads(y)
+            pe, te = 3 * torque * om / 1e3, 3 * thrust / 1e3
+            print(f"    {U:5.1f} | P {P:8.0f} {pe:8.0f} {100 * (pe / P - 1):+6.1f}% | T {T:6.0f} "
+                  f"{te:6.0f} {100 * (te / T - 1):+6.1f}% | tip flap {m.tip_deflection(y)[0]:6.2f}")
 
 
 if __name__ == "__main__":

@@ -161,3 +161,8 @@ def test_dtu10mw_aerodynamics_from_the_ae_and_pc_files():
     mid = 0.5 * (np.interp(0.0, t241[:, 0], t241[:, 1]) + np.interp(0.0, t301[:, 0], t301[:, 1]))
     assert cl[k] == pytest.approx(mid, rel=1e-12)
     assert any("dynstall_method" in n and "not taken" in n for n in notes)
+    # the quarter chord (HAWC2's aerodynamic centre) a quarter chord ahead of the c2 line
+    # along the twisted chord: at the root 5.38 / 4 (cos, sin)(-14.5 deg)
+    th = np.radians(-14.5)
+    assert aero.ac_sweep[0] == pytest.approx(5.38 / 4 * np.cos(th), rel=1e-12)
+    assert aero.ac_prebend[0] == pytest.approx(5.38 / 4 * np.sin(th), rel=1e-12)

@@ -249,9 +249,16 @@ def hawc2_aerodynamics(htc, blade: int = 1) -> tuple:
     except HawcFileError as exc:
         raise TurbineFileError(exc.file, [str(exc).split(": ", 1)[-1]]) from None
     r, chord, thick, pcset = ae.T
-    z, twist_deg = secs[:, 2], secs[:, 3]
+    x, y, z, twist_deg = secs.T
     stations = r / r[-1]
-    twist = np.radians(np.interp(stations * (z[-1] - z[0]) + z[0], z, twist_deg))
+    at = stations * (z[-1] - z[0]) + z[0]
+    twist = np.radians(np.interp(at, z, twist_deg))
+    # HAWC2's aerodynamic centre: the quarter chord, a quarter of the chord from the c2 line
+    # (the half chord) towards the leading edge along the twisted chord line; hawt's b2
+    # (HAWC2's x) points to the leading edge: offsets along b2 (sweep) and b3 (prebend)
+    quarter = 0.25 * chord
+    ac_sweep = np.interp(at, z, x) - x[0] + quarter * np.cos(twist)
+    ac_prebend = np.interp(at, z, y) - y[0] + quarter * np.sin(twist)
     polars, index, key_of = [], [], {}
     for t, k in zip(thick, pcset.astype(int)):
         key = (k, round(float(t), 6))
@@ -268,5 +275,8 @@ def hawc2_aerodynamics(htc, blade: int = 1) -> tuple:
                             "hub_vec"):
             notes.append(f"aero: {cmd.name} {' '.join(cmd.values)} (line {cmd.line}) read but "
                          "not taken (hawt's own aerodynamic models: docs/aerodynamics.md)")
+    notes.append("aerodynamics: the loads act at the quarter chord (HAWC2's aerodynamic "
+                 "centre), a quarter chord ahead of the c2_def line")
     return Aerodynamics(stations=stations, chord=chord, twist=twist,
-                        airfoil=np.array(index), polars=tuple(polars)), notes
+                        airfoil=np.array(index), polars=tuple(polars), ac_sweep=ac_sweep,
+                        ac_prebend=ac_prebend), notes
