@@ -88,10 +88,7 @@ def _lines(path: Path, base: Path, depth: int = 0) -> list:
     place (paths relative to the model folder ``base``)."""
     if depth > 20:
         raise HawcFileError(str(path), None, "continue_in_file nested more than 20 deep")
-    try:
-        text = path.read_text(errors="replace").splitlines()
-    except OSError as exc:
-        raise HawcFileError(str(path), None, f"cannot be read ({exc})") from None
+    text = _text(path)
     out = []
     for i, raw in enumerate(text, 1):
         tok = _TOKEN.findall(raw.split(";", 1)[0])
@@ -149,10 +146,7 @@ def read_htc(path) -> HtcBlock:
 def read_st(path, set_no: int, subset_no: int) -> np.ndarray:
     """The rows (n, columns) of subset ``subset_no`` of set ``set_no`` of an st file."""
     path = Path(path)
-    try:
-        text = path.read_text(errors="replace").splitlines()
-    except OSError as exc:
-        raise HawcFileError(str(path), None, f"cannot be read ({exc})") from None
+    text = _text(path)
     current = None
     for i, raw in enumerate(text, 1):
         tok = raw.split()
@@ -201,13 +195,28 @@ def _numbers(text: list, i: int, path: Path, what: str) -> list:
     return out
 
 
+def _text(path: Path) -> list:
+    """The lines of ``path`` (HawcFileError naming it when it cannot be read)."""
+    try:
+        return path.read_text(errors="replace").splitlines()
+    except OSError as exc:
+        raise HawcFileError(str(path), None, f"cannot be read ({exc})") from None
+
+
+def _table(text: list, start: int, n: int, path: Path, what: str) -> np.ndarray:
+    """``n`` rows of at least four numbers from line ``start`` (0-based) on, the first four
+    kept; HawcFileError naming the first short row's line."""
+    rows = [_numbers(text, start + j, path, f"{what} row {j + 1}") for j in range(n)]
+    bad = next((j for j, r in enumerate(rows) if len(r) < 4), None)
+    if bad is not None:
+        raise HawcFileError(str(path), start + 1 + bad, f"{what}: four numbers expected")
+    return np.array([r[:4] for r in rows])
+
+
 def read_ae(path, set_no: int) -> np.ndarray:
     """Set ``set_no`` of an ae file: rows (radius [m], chord [m], thickness [%], pc set)."""
     path = Path(path)
-    try:
-        text = path.read_text(errors="replace").splitlines()
-    except OSError as exc:
-        raise HawcFileError(str(path), None, f"cannot be read ({exc})") from None
+    text = _text(path)
     nsets = int(_numbers(text, 0, path, "the number of sets")[0])
     i = 1
     for k in range(1, nsets + 1):
@@ -215,13 +224,9 @@ def read_ae(path, set_no: int) -> np.ndarray:
         if len(head) < 2:
             raise HawcFileError(str(path), i + 1, f"set {k}: 'set rows' expected")
         n = int(head[1])
-        rows = [_numbers(text, i + 1 + j, path, f"set {k} row {j + 1}") for j in range(n)]
-        if any(len(r) < 4 for r in rows):
-            bad = next(j for j, r in enumerate(rows) if len(r) < 4)
-            raise HawcFileError(str(path), i + 2 + bad, f"set {k}: radius, chord, thickness "
-                                                        "and pc set expected")
+        rows = _table(text, i + 1, n, path, f"ae set {k} (radius, chord, thickness, pc set)")
         if int(head[0]) == set_no:
-            return np.array([r[:4] for r in rows])
+            return rows
         i += 1 + n
     raise HawcFileError(str(path), None, f"ae set {set_no} not found ({nsets} sets)")
 
@@ -230,10 +235,7 @@ def read_pc(path, set_no: int) -> list:
     """Set ``set_no`` of a pc file: [(thickness [%], name, rows (n, 4): alpha [deg], cl, cd,
     cm)] in the file's order."""
     path = Path(path)
-    try:
-        text = path.read_text(errors="replace").splitlines()
-    except OSError as exc:
-        raise HawcFileError(str(path), None, f"cannot be read ({exc})") from None
+    text = _text(path)
     nsets = int(_numbers(text, 0, path, "the number of sets")[0])
     i = 1
     for k in range(1, nsets + 1):
@@ -247,11 +249,8 @@ def read_pc(path, set_no: int) -> list:
                                                       "thickness [name]'")
             n = int(head[1])
             name = " ".join(text[i].split()[3:])
-            rows = [_numbers(text, i + 1 + j, path, f"table row {j + 1}") for j in range(n)]
-            if any(len(r) < 4 for r in rows):
-                bad = next(j for j, r in enumerate(rows) if len(r) < 4)
-                raise HawcFileError(str(path), i + 2 + bad, "alpha, cl, cd, cm expected")
-            tables.append((head[2], name, np.array([r[:4] for r in rows])))
+            rows = _table(text, i + 1, n, path, f"pc set {k} table (alpha, cl, cd, cm)")
+            tables.append((head[2], name, rows))
             i += 1 + n
         if k == set_no:
             return tables
