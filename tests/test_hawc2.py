@@ -82,6 +82,8 @@ def test_the_readers_name_what_is_wrong(tmp_path):
     bad.write_text("begin new_htc_structure;\n  begin main_body;\n    name blade1;\n")
     with pytest.raises(Exception, match="line 2.*never closed"):
         read_htc(bad)
+    with pytest.raises(TurbineFileError, match=r"x.htc: .*never closed \(line 2\)"):
+        hawc2_body(bad, "blade1")
     st = HTC.parent.parent / "data" / "DTU_10MW_RWT_Blade_st.dat"
     assert read_st(st, 1, 1).shape == (51, 19)
     with pytest.raises(Exception, match="set 1 subset 9 not found"):

@@ -376,6 +376,13 @@ OVERDAMPED_ZETA = 0.999
 _STRUCTURAL = ("flap", "lag", "torsion", "axial", "shear", "tower", "drivetrain")
 
 
+def _root_pairs(roots: list) -> list:
+    """Real roots of one family and symmetry, sorted by decay rate, in consecutive pairs
+    (roots 1 and 2, 3 and 4, ...; a last one alone)."""
+    roots = sorted(roots, key=lambda m: -m.real_per_rev)
+    return [roots[j:j + 2] for j in range(0, len(roots), 2)]
+
+
 def mark_overdamped(modes) -> None:
     """Mark the overdamped modes (OVERDAMPED_ZETA) and pair their real roots: within a
     family and symmetry, sorted by decay rate, roots 1 and 2 are one mode's "slow" and
@@ -393,11 +400,9 @@ def mark_overdamped(modes) -> None:
                 m.symmetry = "cyclic" if (m.cyclic_order or 1) == 1 else f"cyclic-{m.cyclic_order}"
             groups.setdefault((m.family, m.symmetry), []).append(m)
     for group in groups.values():
-        group.sort(key=lambda m: -m.real_per_rev)
-        for j in range(0, len(group) - 1, 2):
-            group[j].overdamped, group[j + 1].overdamped = "slow", "fast"
-        if len(group) % 2:
-            group[-1].overdamped = "root"
+        for pair in _root_pairs(group):
+            for m, root in zip(pair, ("slow", "fast") if len(pair) == 2 else ("root",)):
+                m.overdamped = root
 
 
 def _natural(m) -> float:
@@ -420,10 +425,8 @@ def number_modes(modes):
         else:
             units.append((_natural(m), m.family, m.symmetry, [m]))
     for (fam, sym), ms in pairs.items():
-        ms.sort(key=lambda m: -m.real_per_rev)
-        for j in range(0, len(ms) - 1, 2):
-            units.append((float(np.sqrt(_natural(ms[j]) * _natural(ms[j + 1]))), fam, sym,
-                          ms[j:j + 2]))
+        for a, b in _root_pairs(ms):
+            units.append((float(np.sqrt(_natural(a) * _natural(b))), fam, sym, [a, b]))
     counts: dict = {}
     # equal natural frequencies (a pair of exponents mirrored about the imaginary axis, the
     # unstable teeter's; a free yaw angle's double zero, 1e-9 per-rev apart) keep the list's

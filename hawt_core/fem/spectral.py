@@ -46,7 +46,7 @@ import numpy as np
 
 from ..model import Beam
 from ..numerics.limits import MAX_ORDER
-from ..numerics.rotations import LEVI_CIVITA_9, rot1, turn_e1_to
+from ..numerics.rotations import LEVI_CIVITA_9, rot1, skew, turn_e1_to
 from .beam import (BLOCK_SIZE, ROOT_SIZE, CellLayout, _cross_components, q_stacked,
                    turn_stacked)
 from .damping import DampingCoefficients, section_operators
@@ -256,13 +256,8 @@ class SpectralBeamElements(CellLayout):
             # strains' part, gamma x F_d, second order): without it a shear-flexible
             # section's viscous shear force did work on the slope rate instead of the shear
             # strain rate (a uniform cantilever with uniform mu: zeta 1.99 x mu w / 2)
-            t = self._t.reshape(Ne, Q, 3)
-            skew = np.zeros((Ne, Q, 3, 3))
-            skew[..., 0, 1], skew[..., 0, 2] = -t[..., 2], t[..., 1]
-            skew[..., 1, 0], skew[..., 1, 2] = t[..., 2], -t[..., 0]
-            skew[..., 2, 0], skew[..., 2, 1] = -t[..., 1], t[..., 0]
             tF = np.zeros((Ne, Q, 6, 6))
-            tF[..., 3:6, :] = skew @ mq[..., 0:3, :]
+            tF[..., 3:6, :] = skew(self._t.reshape(Ne, Q, 3)) @ mq[..., 0:3, :]
             self._Cmu -= np.einsum("eq,qj,qk,eqab->ejkab", W, Lq, Pq, tF)
         if alpha_mu is not None:
             self._amuT = np.ascontiguousarray(

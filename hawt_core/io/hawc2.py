@@ -32,6 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from ..model import Aerodynamics, Beam, BeamDamping, Polar
+from ..numerics.rotations import skew
 from .hawc2_files import (TIMOSHENKO_COLUMNS, HawcFileError, model_folder, read_ae, read_htc,
                           read_pc, read_st)
 from .imported import BladeAxis, sections_from_matrices, untwist_sections
@@ -78,10 +79,7 @@ def timoshenko_matrices(st: dict) -> tuple:
     M = np.zeros((n, 6, 6))
     for k in range(3):
         M[:, k, k] = m
-    c2, c3 = cg[:, 0], cg[:, 1]
-    Sc = np.zeros((n, 3, 3))            # S(c) v = c x v, c = (0, c2, c3)
-    Sc[:, 0, 1], Sc[:, 0, 2] = -c3, c2
-    Sc[:, 1, 0], Sc[:, 2, 0] = c3, -c2
+    Sc = skew(np.concatenate([np.zeros((n, 1)), cg], -1))      # S(c) v = c x v
     M[:, :3, 3:] = -m[:, None, None] * Sc
     M[:, 3:, :3] = m[:, None, None] * Sc
     M[:, 3, 3] = S[:, 0, 0] + S[:, 1, 1]
@@ -103,6 +101,19 @@ def _body(root, name: str, htc: Path):
              if b.name == "main_body" and b.command("name") is not None]
     raise TurbineFileError(str(htc), [f"main_body {name!r} not found; the file has "
                                       f"{', '.join(names) or 'none'}"])
+
+
+def _c2_def(body, name: str, htc: Path) -> np.ndarray:
+    """The body's c2_def sections (n, 4): x, y, z, twist [deg] in main-body coordinates,
+    z increasing (TurbineFileError naming the body otherwise)."""
+    c2 = body.block("c2_def")
+    if c2 is None:
+        raise TurbineFileError(str(htc), [f"main_body {name}: no c2_def"])
+    secs = np.array([c.numbers(str(htc))[1:5] for c in c2.all("sec")])
+    if secs.shape[0] < 2 or np.any(np.diff(secs[:, 2]) <= 0):
+        raise TurbineFileError(str(htc), [f"main_body {name}: c2_def needs two or more "
+                                          "sections with z increasing"])
+    return secs
 
 
 def hawc2_body(htc, name: str = "blade1", elements: int = 3, order: int = 6) -> tuple:
@@ -138,20 +149,16 @@ def hawc2_body(htc, name: str = "blade1", elements: int = 3, order: int = 6) -> 
             raise TurbineFileError(str(st_path), [
                 f"set {sets.values[0]} subset {sets.values[1]}: {rows.shape[1]} columns; a "
                 f"Timoshenko set has {len(TIMOSHENKO_COLUMNS)}"])
-        c2 = body.block("c2_def")
-        if c2 is None:
-            raise TurbineFileError(str(htc), [f"main_body {name}: no c2_def"])
-        secs = np.array([c.numbers(str(htc))[1:5] for c in c2.all("sec")])
+        secs = _c2_def(body, name, htc)
     except HawcFileError as exc:
-        raise TurbineFileError(exc.file, [str(exc).split(": ", 1)[-1]]) from None
+        raise TurbineFileError(exc.file, [exc.message + (f" (line {exc.line})" if exc.line
+                                                         else "")]) from None
     st = {k: rows[:, j] for j, k in enumerate(TIMOSHENKO_COLUMNS)}
     r = st["r"]
     if r[0] != 0 or np.any(np.diff(r) <= 0):
         raise TurbineFileError(str(st_path), [f"r = {r[:4].tolist()} ...: must start at 0 "
                                               "and increase"])
     x, y, z, twist_deg = secs.T
-    if np.any(np.diff(z) <= 0):
-        raise TurbineFileError(str(htc), [f"main_body {name}: c2_def z must increase"])
     length = float(z[-1] - z[0])
     # hawt's axes (b1, b2, b3) = (z, x, y); BladeAxis takes IEC (x, y, z) = (b3, -b2, b1)
     axis = BladeAxis(np.stack([y, -x, z], -1), (z - z[0]) / length)
@@ -243,11 +250,10 @@ def hawc2_aerodynamics(htc, blade: int = 1) -> tuple:
         pc_path = base / need["pc_filename"].values[0]
         sets = {int(p) for p in ae[:, 3]}
         pcs = {k: read_pc(pc_path, k) for k in sets}
-        body = _body(root, link.values[2], htc)
-        c2 = body.block("c2_def")
-        secs = np.array([c.numbers(str(htc))[1:5] for c in c2.all("sec")])
+        secs = _c2_def(_body(root, link.values[2], htc), link.values[2], htc)
     except HawcFileError as exc:
-        raise TurbineFileError(exc.file, [str(exc).split(": ", 1)[-1]]) from None
+        raise TurbineFileError(exc.file, [exc.message + (f" (line {exc.line})" if exc.line
+                                                         else "")]) from None
     r, chord, thick, pcset = ae.T
     x, y, z, twist_deg = secs.T
     stations = r / r[-1]

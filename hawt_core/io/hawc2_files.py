@@ -31,7 +31,7 @@ class HawcFileError(ValueError):
     """A HAWC2 file that cannot be read: file, line (or None) and what is wrong."""
 
     def __init__(self, file: str, line: Optional[int], message: str):
-        self.file, self.line = file, line
+        self.file, self.line, self.message = file, line, message
         super().__init__(f"{file}" + (f", line {line}" if line else "") + f": {message}")
 
 

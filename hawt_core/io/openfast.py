@@ -109,9 +109,10 @@ class _Deck:
             kf = read_keyed(path)
             fill(kf)
         except KeyedFileError as exc:
-            raise TurbineFileError(str(path), [f"{exc.args[0].split(': ', 1)[-1]}"
-                                               + (f" (line {exc.line})" if exc.line else "")
-                                               + f"; check it against the {what} input format"])
+            # the file the reader was in: the one named, or one it leads to (a polar, a blade)
+            raise TurbineFileError(exc.file, [exc.message
+                                              + (f" (line {exc.line})" if exc.line else "")
+                                              + f"; check it against the {what} input format"])
         self.keys[what] = {k: (kf.lines[k], kf.values[k]) for k in kf.values}
         return kf
 
@@ -177,22 +178,9 @@ def _table(deck: _Deck, module: str, keys: tuple, vt: dict) -> dict:
     return out
 
 
-#: The main file's input-file keys whose folders (``*_path``) the importer looks up.
-_FILE_KEYS = ("EDFile", "InflowFile", "AeroFile", "ServoFile", "HydroFile", "SubFile",
-              "MooringFile", "IceFile")
-
-
-def _fill_main(deck: _Deck, kf: KeyedFile) -> None:
-    fst = dict(kf.values)
-    for k in _FILE_KEYS:
-        if isinstance(fst.get(k), str):
-            fst[f"{k}_path"] = os.path.split(fst[k])[0]
-    deck.vt["Fst"] = fst
-
-
 def _main(deck: _Deck):
     # by its keys: every OpenFAST version's main file (openfast-io reads the v5 layout only)
-    deck.read_keys(MAIN, deck.fst, lambda kf: _fill_main(deck, kf))
+    deck.read_keys(MAIN, deck.fst, lambda kf: deck.vt.__setitem__("Fst", dict(kf.values)))
     fst = deck.vt[MAIN] = deck.vt["Fst"]           # the main file's keys under its role
     comp = {k: fst.get(k) for k in ("CompElast", "CompAero", "CompServo", "CompHydro",
                                     "CompSub", "CompMooring", "CompIce", "CompInflow")}
@@ -293,7 +281,6 @@ def _skew_factor(deck: _Deck, ad: dict, adn: str) -> float:
 def _fill_aerodyn(deck: _Deck, kf: KeyedFile) -> None:
     """AeroDyn read by its keys (openfast_keys.aerodyn_files) into the deck's dictionaries."""
     deck.vt["AeroDyn"], deck.vt["AeroDynBlade"] = aerodyn_files(kf)
-    deck.vt["Fst"].setdefault("AeroFile_path", "")
 
 
 def _aerodynamics(deck: _Deck, comp: dict, nb: int, length: float):
@@ -312,9 +299,10 @@ def _aerodynamics(deck: _Deck, comp: dict, nb: int, length: float):
         return None
     ad, bl = deck.vt["AeroDyn"], deck.vt["AeroDynBlade"]
     adn = Path(deck.sources["AeroDyn"]).name
-    base = Path(deck.sources["AeroDyn"]).parent / deck.vt["Fst"]["AeroFile_path"]
+    # the blade file is relative to the AeroDyn file's folder (aerodyn_files read it there)
+    base = Path(deck.sources["AeroDyn"]).parent
     names = [ad.get(f"ADBlFile{k}") for k in range(1, nb + 1)]
-    if isinstance(bl, list) or len(set(names)) > 1:
+    if len(set(names)) > 1:
         raise TurbineFileError(deck.sources["AeroDyn"], [
             f"ADBlFile(1..{nb}) = {names}: hawt's blades are identical; allowed: one AeroDyn "
             "blade file for every blade"])

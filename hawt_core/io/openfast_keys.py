@@ -39,7 +39,7 @@ class KeyedFileError(ValueError):
     """A key-based read failed: ``file``, ``line`` (or None) and the message."""
 
     def __init__(self, file: str, line, message: str):
-        self.file, self.line = file, line
+        self.file, self.line, self.message = file, line, message
         super().__init__(f"{file}" + (f", line {line}" if line else "") + f": {message}")
 
 

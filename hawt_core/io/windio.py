@@ -251,12 +251,12 @@ def _from_v1(path: Path, windIO, messages: list) -> dict:
         dropped = [g for g in ("supervisory", "pitch", "torque") if g in control]
         for g in dropped:
             control.pop(g)
-        if filled or dropped:
-            messages.append(f"{path.name}: the 1.x control block completed for the 2.0 schema: "
-                            + "; ".join(filled + [f"control.{', control.'.join(dropped)} "
-                                                  "(1.x groups the 2.0 schema does not "
-                                                  "allow) removed" if dropped else ""]).rstrip(
-                                "; "))
+        if dropped:
+            filled.append(f"control.{', control.'.join(dropped)} (1.x groups the 2.0 schema "
+                          "does not allow) removed")
+        if filled:
+            messages.append(f"{path.name}: the 1.x control block completed for the 2.0 "
+                            f"schema: {'; '.join(filled)}")
     return data
 
 
