@@ -1,9 +1,10 @@
-"""Import time of every OpenFAST deck hawt is tried on (issue 35: each < 2 s), and what each
-brings: the layout, the warnings and the files read.
+"""Import time of every OpenFAST deck and HAWC2 model hawt is tried on (issue 35: each < 2 s),
+and what each brings: the warnings and the files read.
 
 Decks: the rosco wheel's (v5 layout; every Test_Cases deck with an .fst) and the older
 layouts committed in tests/data/openfast (openfast_toolbox's NREL 5-MW v3.2 and v3.x decks,
-the IEA 15-MW reference turbine's own v3.5-v4 deck).  Each import is timed in this process,
+the IEA 15-MW reference turbine's own v3.5-v4 deck); the HAWC2 models in tests/data/hawc2
+(h2lib_tests' DTU 10-MW and IEA 15-MW onshore).  Each import is timed in this process,
 best of three (the first pays the imports of numpy and friends once).
 
     PYTHONPATH=. .venv/bin/python bench/import_decks.py
@@ -23,11 +24,15 @@ def decks() -> list:
     cases = rosco_test_cases()
     if cases is not None:
         out += sorted(cases.rglob("*.fst"))
+    hawc2 = ROOT / "tests" / "data" / "hawc2"
+    out += [hawc2 / "DTU_10_MW" / "htc" / "DTU_10MW_RWT.htc",
+            hawc2 / "IEA-15-240-RWT-Onshore" / "htc" / "IEA_15MW_RWT_Onshore.htc"]
     return out
 
 
 def main() -> None:
     from hawt_core.io import TurbineFileError
+    from hawt_core.io.hawc2_turbine import read_hawc2
     from hawt_core.io.openfast import read_openfast
     print(f"{'deck':<70}{'best [s]':>10}{'warnings':>10}{'files':>7}  result")
     worst = 0.0
@@ -38,7 +43,8 @@ def main() -> None:
             try:
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore")
-                    result = read_openfast(fst)
+                    read = read_hawc2 if fst.suffix == ".htc" else read_openfast
+                    result = read(fst)
                 status = "ok"
             except TurbineFileError as exc:
                 status = "refused: " + " ".join(str(exc).split())[:90]

@@ -119,14 +119,14 @@ def test_iea15mw_blade_from_hawc2_is_the_windio_blade():
     st set (h2lib_tests, read through continue_in_file) and windio's WindIO 2.x file (full
     6x6 matrices).  Reference: the WindIO blade's clamped modes at rest, computed on the
     same mesh; tolerance 0.5 % (the noFPM st drops the 6x6's couplings; found 0.02-0.2 %).
-    The body's damping_aniso is named as read but not modelled."""
+    The body's damping_aniso is taken by damping_posdef's rule, and the notes say so."""
     windio = pytest.importorskip("windIO")
     from hawt_core.io.windio import read_windio
     example = Path(windio.__file__).parent / "examples" / "turbine" / "IEA-15-240-RWT.yaml"
     if not example.is_file():
         pytest.skip("windio's IEA 15-MW example is not installed")
     beam, notes = hawc2_body(IEA_HTC, "blade1")
-    assert any("damping_aniso" in n and "not modelled" in n for n in notes)
+    assert any("damping_aniso" in n and "damping_posdef's rule" in n for n in notes)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         ref = read_windio(example).turbine.blade

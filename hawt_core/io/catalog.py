@@ -1,5 +1,5 @@
-"""Where a turbine comes from: a shipped short name, a hawt file, an OpenFAST deck or a WindIO
-file.
+"""Where a turbine comes from: a shipped short name, a hawt file, an OpenFAST deck, a HAWC2
+model or a WindIO file.
 
 ``load_any(spec)`` is what every command and the ROS node take as TURBINE:
 
@@ -8,6 +8,8 @@ file.
   ``iea15mw``, ...; :func:`shipped_turbines` lists them with what they are);
 - a path ending in ``.fst``: an OpenFAST deck, imported by :mod:`hawt_core.io.openfast`
   (any OpenFAST version's layout, read by its keys); its warnings are issued as TurbineFileWarning;
+- a path ending in ``.htc``: a HAWC2 model, imported by :mod:`hawt_core.io.hawc2_turbine`
+  (its st, ae, pc files and operational data beside it), warnings likewise;
 - a YAML file whose top-level keys are WindIO's (``windIO_version``, ``assembly``,
   ``components``): a WindIO turbine, imported by :mod:`hawt_core.io.windio` (needs the
   optional ``windio``), warnings likewise;
@@ -120,6 +122,9 @@ def load_any(spec=None) -> Turbine:
     if p.suffix.lower() == ".fst":
         from .openfast import read_openfast
         return _imported(read_openfast(p))
+    if p.suffix.lower() == ".htc":
+        from .hawc2_turbine import read_hawc2
+        return _imported(read_hawc2(p))
     if not p.exists() and "/" not in text and not p.suffix:
         shipped_path(text)                 # raises with the list of shipped names
     if p.suffix.lower() in (".yaml", ".yml") and is_windio(p):

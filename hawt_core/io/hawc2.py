@@ -35,10 +35,12 @@ from ..model import Aerodynamics, Beam, BeamDamping, Polar
 from ..numerics.rotations import skew
 from .hawc2_files import (TIMOSHENKO_COLUMNS, HawcFileError, model_folder, read_ae, read_htc,
                           read_pc, read_st)
+from .hawc2_layout import c2_sections
 from .imported import BladeAxis, sections_from_matrices, untwist_sections
 from .turbine_yaml import TurbineFileError
 
-__all__ = ["hawc2_body", "hawc2_aerodynamics", "timoshenko_matrices", "thickness_polar"]
+__all__ = ["hawc2_body", "hawc2_aerodynamics", "timoshenko_matrices", "thickness_polar",
+           "body_st", "body_damping"]
 
 
 def timoshenko_matrices(st: dict) -> tuple:
@@ -89,75 +91,122 @@ def timoshenko_matrices(st: dict) -> tuple:
 
 
 def _body(root, name: str, htc: Path):
+    """The data block of main body ``name`` (a copy_main_body resolved to the body copied)."""
     structure = root.block("new_htc_structure")
     if structure is None:
         raise TurbineFileError(str(htc), ["no new_htc_structure block"])
-    for blk in structure.blocks:
-        if blk.name == "main_body":
-            cmd = blk.command("name")
-            if cmd is not None and cmd.values and cmd.values[0] == name:
-                return blk
-    names = [b.command("name").values[0] for b in structure.blocks
-             if b.name == "main_body" and b.command("name") is not None]
-    raise TurbineFileError(str(htc), [f"main_body {name!r} not found; the file has "
-                                      f"{', '.join(names) or 'none'}"])
+    blocks = {b.command("name").values[0]: b for b in structure.blocks
+              if b.name == "main_body" and b.command("name") is not None
+              and b.command("name").values}
+    seen = []
+    while name in blocks and blocks[name].command("copy_main_body") is not None \
+            and name not in seen:
+        seen.append(name)
+        name = blocks[name].command("copy_main_body").values[0]
+    if name not in blocks:
+        raise TurbineFileError(str(htc), [f"main_body {name!r} not found; the file has "
+                                          f"{', '.join(blocks) or 'none'}"])
+    return blocks[name]
 
 
-def _c2_def(body, name: str, htc: Path) -> np.ndarray:
+def _c2_def(body, name: str, htc: Path, flip: bool = False) -> np.ndarray:
     """The body's c2_def sections (n, 4): x, y, z, twist [deg] in main-body coordinates,
-    z increasing (TurbineFileError naming the body otherwise)."""
-    c2 = body.block("c2_def")
-    if c2 is None:
-        raise TurbineFileError(str(htc), [f"main_body {name}: no c2_def"])
-    secs = np.array([c.numbers(str(htc))[1:5] for c in c2.all("sec")])
-    if secs.shape[0] < 2 or np.any(np.diff(secs[:, 2]) <= 0):
-        raise TurbineFileError(str(htc), [f"main_body {name}: c2_def needs two or more "
-                                          "sections with z increasing"])
+    z increasing (TurbineFileError naming the body otherwise); ``flip``: the body's frame
+    turned half a turn about its y (x, z and the twist change sign: a tower, whose z points
+    down)."""
+    try:
+        secs = c2_sections(body, name, str(htc))
+    except HawcFileError as exc:
+        raise TurbineFileError(exc.file, [exc.message]) from None
+    if flip:
+        secs = secs * np.array([-1.0, 1.0, -1.0, -1.0])
+    if np.any(np.diff(secs[:, 2]) <= 0):
+        raise TurbineFileError(str(htc), [f"main_body {name}: c2_def z must "
+                                          f"{'decrease' if flip else 'increase'} along the "
+                                          "sections"])
     return secs
 
 
-def hawc2_body(htc, name: str = "blade1", elements: int = 3, order: int = 6) -> tuple:
-    """(Beam, notes) of the main body ``name`` of the HAWC2 model file ``htc`` (the notes
-    also name every command and block of the body that is read but not modelled): its c2_def
-    line (prebend and sweep; the twist turning the sections), its Timoshenko st set
-    (``timoschenko_input``; the FPM 6x6 form is refused) and its ``damping_posdef``.  The
-    stations are the st file's r over its last value, taken as fractions of the span
-    along z."""
-    htc = Path(htc)
+def body_st(htc: Path, body, name: str) -> tuple:
+    """(st columns {name: array}, st file path, 'set SET SUBSET' text) of a main body's
+    timoschenko_input (the FPM 6x6 form is refused)."""
+    ti = body.block("timoschenko_input")
+    if ti is None:
+        raise TurbineFileError(str(htc), [f"main_body {name}: no timoschenko_input"])
+    fname, sets = ti.command("filename"), ti.command("set")
+    if fname is None or sets is None or len(sets.values) < 2:
+        raise TurbineFileError(str(htc), [f"main_body {name}: timoschenko_input needs "
+                                          "'filename' and 'set SET SUBSET'"])
+    fpm = ti.command("fpm") or ti.command("FPM")
+    if fpm is not None and fpm.values[:1] == ["1"]:
+        raise TurbineFileError(str(htc), [f"main_body {name}: fpm 1 (a fully populated "
+                                          "6x6 st file) is not read yet; allowed: fpm 0"])
+    # HAWC2 runs from the model's folder, usually the htc folder's parent
+    tried = [(d / fname.values[0]).resolve() for d in (model_folder(htc), htc.parent)]
+    st_path = next((p for p in tried if p.is_file()), None)
+    if st_path is None:
+        raise TurbineFileError(str(htc), [
+            f"main_body {name}: timoschenko_input filename {fname.values[0]!r} not found "
+            f"(looked for {', '.join(map(str, tried))})"])
     try:
-        root = read_htc(htc)
-        body = _body(root, name, htc)
-        ti = body.block("timoschenko_input")
-        if ti is None:
-            raise TurbineFileError(str(htc), [f"main_body {name}: no timoschenko_input"])
-        fname, sets = ti.command("filename"), ti.command("set")
-        if fname is None or sets is None or len(sets.values) < 2:
-            raise TurbineFileError(str(htc), [f"main_body {name}: timoschenko_input needs "
-                                              "'filename' and 'set SET SUBSET'"])
-        if ti.command("fpm") is not None and ti.command("fpm").values[:1] == ["1"]:
-            raise TurbineFileError(str(htc), [f"main_body {name}: fpm 1 (a fully populated "
-                                              "6x6 st file) is not read yet; allowed: fpm 0"])
-        # HAWC2 runs from the model's folder, usually the htc folder's parent
-        tried = [(d / fname.values[0]).resolve() for d in (model_folder(htc), htc.parent)]
-        st_path = next((p for p in tried if p.is_file()), None)
-        if st_path is None:
-            raise TurbineFileError(str(htc), [
-                f"main_body {name}: timoschenko_input filename {fname.values[0]!r} not found "
-                f"(looked for {', '.join(map(str, tried))})"])
         rows = read_st(st_path, int(float(sets.values[0])), int(float(sets.values[1])))
-        if rows.shape[1] != len(TIMOSHENKO_COLUMNS):
-            raise TurbineFileError(str(st_path), [
-                f"set {sets.values[0]} subset {sets.values[1]}: {rows.shape[1]} columns; a "
-                f"Timoshenko set has {len(TIMOSHENKO_COLUMNS)}"])
-        secs = _c2_def(body, name, htc)
     except HawcFileError as exc:
         raise TurbineFileError(exc.file, [exc.message + (f" (line {exc.line})" if exc.line
                                                          else "")]) from None
+    if rows.shape[1] != len(TIMOSHENKO_COLUMNS):
+        raise TurbineFileError(str(st_path), [
+            f"set {sets.values[0]} subset {sets.values[1]}: {rows.shape[1]} columns; a "
+            f"Timoshenko set has {len(TIMOSHENKO_COLUMNS)}"])
     st = {k: rows[:, j] for j, k in enumerate(TIMOSHENKO_COLUMNS)}
     r = st["r"]
     if r[0] != 0 or np.any(np.diff(r) <= 0):
         raise TurbineFileError(str(st_path), [f"r = {r[:4].tolist()} ...: must start at 0 "
                                               "and increase"])
+    return st, st_path, f"set {sets.values[0]} subset {sets.values[1]}"
+
+
+def body_damping(htc: Path, body, name: str) -> tuple:
+    """(BeamDamping or None, notes, the command taken) of a body's ``damping_posdef`` (or ``damping_aniso``,
+    taken by the same rule and said so)."""
+    for key in ("damping_posdef", "damping_aniso"):
+        dp = body.command(key)
+        if dp is None:
+            continue
+        mx, my, mz, kx, ky, kz = (dp.numbers(str(htc)) + [0.0] * 6)[:6]
+        damping = BeamDamping(stiffness=(kz, kx, ky, kz, ky, kx),
+                              mass=(mz, mx, my, mz, my, mx))
+        note = f"{name}: {key} {mx:g} {my:g} {mz:g} {kx:g} {ky:g} {kz:g} -> {damping.text()}"
+        if key == "damping_aniso":
+            note += (" (HAWC2's anisotropic Rayleigh damping taken by damping_posdef's rule: "
+                     "stiffness-proportional per direction of deformation)")
+        return damping, [note], key
+    return None, [], None
+
+
+def hawc2_body(htc, name: str = "blade1", elements: int = 3, order: int = 6,
+               flip: bool = False) -> tuple:
+    """(Beam, notes) of the main body ``name`` of the HAWC2 model file ``htc`` (the notes
+    also name every command and block of the body that is read but not modelled): its c2_def
+    line (prebend and sweep; the twist turning the sections), its Timoshenko st set
+    (``timoschenko_input``; the FPM 6x6 form is refused) and its ``damping_posdef``.  The
+    stations are the st file's r over its last value, taken as fractions of the span
+    along z.  ``flip``: the body's z points against its span (a tower: HAWC2's z is down),
+    so its frame is turned half a turn about y first (x, z, the twist, the st file's x
+    offsets and principal-axis pitch change sign): a tower's (t1, t2, t3) = (-z, -x, y)."""
+    htc = Path(htc)
+    try:
+        root = read_htc(htc)
+    except HawcFileError as exc:
+        raise TurbineFileError(exc.file, [exc.message + (f" (line {exc.line})" if exc.line
+                                                         else "")]) from None
+    body = _body(root, name, htc)
+    st, st_path, set_text = body_st(htc, body, name)
+    secs = _c2_def(body, name, htc, flip)
+    if flip:
+        st = dict(st)
+        for k in ("x_cg", "x_sh", "x_e", "pitch"):
+            st[k] = -st[k]
+    r = st["r"]
     x, y, z, twist_deg = secs.T
     length = float(z[-1] - z[0])
     # hawt's axes (b1, b2, b3) = (z, x, y); BladeAxis takes IEC (x, y, z) = (b3, -b2, b1)
@@ -167,18 +216,12 @@ def hawc2_body(htc, name: str = "blade1", elements: int = 3, order: int = 6) -> 
     K, M = timoshenko_matrices(st)
     sec = sections_from_matrices(stations, untwist_sections(K, twist),
                                  untwist_sections(M, twist), prebend=prebend, sweep=sweep)
-    notes = [f"{name}: {len(r)} st stations ({st_path.name} set {sets.values[0]} subset "
-             f"{sets.values[1]}), c2_def line of {len(z)} sections, length {length:.6g} m"]
-    damping = None
-    dp = body.command("damping_posdef")
-    if dp is not None:
-        mx, my, mz, kx, ky, kz = (dp.numbers(str(htc)) + [0.0] * 6)[:6]
-        damping = BeamDamping(stiffness=(kz, kx, ky, kz, ky, kx),
-                              mass=(mz, mx, my, mz, my, mx))
-        notes.append(f"{name}: damping_posdef {mx:g} {my:g} {mz:g} {kx:g} {ky:g} {kz:g} -> "
-                     f"{damping.text()}")
+    notes = [f"{name}: {len(r)} st stations ({st_path.name} {set_text}), c2_def line of "
+             f"{len(z)} sections, length {length:.6g} m"]
+    damping, dnotes, taken = body_damping(htc, body, name)
+    notes += dnotes
     # what the body says that the beam does not take: named, never dropped silently
-    read = {"name", "type", "nbodies", "node_distribution", "damping_posdef"}
+    read = {"name", "type", "nbodies", "node_distribution", taken}
     why = {"damping": "hawt takes damping_posdef", "damping_aniso": "hawt takes damping_posdef",
            "concentrated_mass": "point masses on a body are not modelled yet",
            "gravity": "hawt's gravity is the turbine's"}
@@ -250,10 +293,10 @@ def hawc2_aerodynamics(htc, blade: int = 1) -> tuple:
         pc_path = base / need["pc_filename"].values[0]
         sets = {int(p) for p in ae[:, 3]}
         pcs = {k: read_pc(pc_path, k) for k in sets}
-        secs = _c2_def(_body(root, link.values[2], htc), link.values[2], htc)
     except HawcFileError as exc:
         raise TurbineFileError(exc.file, [exc.message + (f" (line {exc.line})" if exc.line
                                                          else "")]) from None
+    secs = _c2_def(_body(root, link.values[2], htc), link.values[2], htc)
     r, chord, thick, pcset = ae.T
     x, y, z, twist_deg = secs.T
     stations = r / r[-1]

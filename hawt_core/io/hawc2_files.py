@@ -20,7 +20,7 @@ from typing import Optional
 import numpy as np
 
 __all__ = ["HtcBlock", "HtcCommand", "read_htc", "read_st", "read_ae", "read_pc",
-           "HawcFileError", "TIMOSHENKO_COLUMNS", "model_folder"]
+           "HawcFileError", "TIMOSHENKO_COLUMNS", "model_folder", "read_opt", "OPT_COLUMNS"]
 
 #: The columns of a Timoshenko st subset (HAWC2 manual, "Structural data").
 TIMOSHENKO_COLUMNS = ("r", "m", "x_cg", "y_cg", "ri_x", "ri_y", "x_sh", "y_sh", "E", "G",
@@ -255,3 +255,28 @@ def read_pc(path, set_no: int) -> list:
         if k == set_no:
             return tables
     raise HawcFileError(str(path), None, f"pc set {set_no} not found ({nsets} sets)")
+
+
+#: Columns of HAWCStab2's operational data (``.opt``, ``operation.dat``): the first three
+#: are always there, the aerodynamic power and thrust when HAWCStab2 wrote the file.
+OPT_COLUMNS = ("wind_speed", "pitch", "rpm", "power_kw", "thrust_kn")
+
+
+def read_opt(path) -> dict:
+    """HAWCStab2's operational data: a first line starting with the number of rows, then
+    rows of wind speed [m/s], pitch [deg], rotor speed [rpm] and, in a written ``.opt``,
+    aerodynamic power [kW] and thrust [kN].  Returns {column: array} (OPT_COLUMNS, the ones
+    present)."""
+    path = Path(path)
+    text = _text(path)
+    n = _numbers(text, 0, path, "the number of rows")
+    if not n or n[0] < 1 or n[0] != int(n[0]):
+        raise HawcFileError(str(path), 1, "the first line must start with the number of "
+                                          "rows")
+    rows = [_numbers(text, 1 + j, path, f"row {j + 1}") for j in range(int(n[0]))]
+    width = min(len(r) for r in rows)
+    if width < 3:
+        bad = next(j for j, r in enumerate(rows) if len(r) < 3)
+        raise HawcFileError(str(path), bad + 2, "wind speed, pitch and rotor speed expected")
+    data = np.array([r[:min(width, 5)] for r in rows])
+    return {k: data[:, j] for j, k in enumerate(OPT_COLUMNS[:data.shape[1]])}
