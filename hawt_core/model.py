@@ -351,8 +351,13 @@ class Aerodynamics:
     b3, i.e. AeroDyn's BlTwist, positive towards feather, is minus it); ``airfoil``: the
     index into ``polars`` of the station's airfoil; ``ac_prebend``, ``ac_sweep`` [m]: the
     aerodynamic centre's offsets along b3 and b2 (AeroDyn's BlCrvAC and -BlSwpAC; None =
-    on the straight b1 axis); ``cant`` [rad]: the airfoil plane's tilt about the chord
-    (AeroDyn's BlCrvAng; None = 0).  ``skew_factor`` [-]: the constant K of Pitt and Peters'
+    on the straight b1 axis; hawt's aerodynamics do not use them: the loads act on the
+    beam's own line); ``ac_chordwise`` [m]: the aerodynamic centre's distance from the
+    beam's reference line along the chord, towards the leading edge, where the loads act
+    (their moment about the reference line; a HAWC2 blade: a quarter chord, its c2 line
+    being the half chord; None = at the reference line, as AeroDyn's loads act at the blade
+    nodes); ``cant`` [rad]: the airfoil plane's tilt about the chord (AeroDyn's BlCrvAng;
+    None = 0).  ``skew_factor`` [-]: the constant K of Pitt and Peters'
     skewed-wake correction of the axial induction in yawed or tilted flow (aero/inflow.py;
     AeroDyn's SkewRedistrFactor, default 15 pi / 32); 0 = no correction.
     """
@@ -366,12 +371,13 @@ class Aerodynamics:
     ac_sweep: Optional[np.ndarray] = None
     cant: Optional[np.ndarray] = None
     skew_factor: float = PITT_PETERS_SKEW
+    ac_chordwise: Optional[np.ndarray] = None
 
     def __post_init__(self):
         object.__setattr__(self, "skew_factor", float(self.skew_factor))
         for k in ("stations", "chord", "twist"):
             object.__setattr__(self, k, _frozen_array(getattr(self, k), 1))
-        for k in ("ac_prebend", "ac_sweep", "cant"):
+        for k in ("ac_prebend", "ac_sweep", "cant", "ac_chordwise"):
             if getattr(self, k) is not None:
                 object.__setattr__(self, k, _frozen_array(getattr(self, k), 1))
         idx = np.array(self.airfoil, dtype=int)

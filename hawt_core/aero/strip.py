@@ -9,8 +9,13 @@ B's chord plane (B2, B3):
     phi_B = atan2(W3, -W2),   alpha = phi_B + tau,   q = rho (W2^2 + W3^2) / 2
 
 (hawt's twist sign: AeroDyn's -BlTwist); lift along (W3, -W2)/|W|, drag along W, the pitching
-moment c_m q c^2 about B1, all at the reference line (the aerodynamic centre's offset is not
-modelled yet); the spanwise component W1 carries no load (independence principle).
+moment c_m q c^2 about B1, all at the aerodynamic centre: on the reference line, or (the
+model's ``ac_chordwise`` = a) a distance a ahead of it along the chord, d = a (0, cos tau,
+sin tau) in B, which adds the moment d x F of the force about the reference line (a HAWC2
+blade's c2 line is the half chord, its aerodynamic centre the quarter chord).  The velocity
+is the reference line's (the section's rotation rate times d is left out: the rotor's spin
+moves d along the span, which carries no load); the spanwise component W1 carries no load
+(independence principle).
 
 The beam's section-load unknowns are in components of the root frame b turned by the elastic
 rotation, not of B: :meth:`BladeStrips.to_section` and :meth:`BladeStrips.from_section` apply
@@ -46,6 +51,12 @@ class BladeStrips:
         self.chord = np.interp(s, aero.stations, aero.chord)[:, :, None]        # (N, G, 1)
         self.tau = np.interp(s, aero.stations, aero.twist)[:, :, None]
         self.polars = StationPolars(aero, s.ravel())
+        #: the aerodynamic centre from the reference line in B (N, G, 1, 3) [m] (in the
+        #: chord plane: d1 = 0), or None
+        self.ac_offset = None
+        if aero.ac_chordwise is not None:
+            a = np.interp(s, aero.stations, aero.ac_chordwise)[:, :, None]
+            self.ac_offset = np.stack([0 * a, a * np.cos(self.tau), a * np.sin(self.tau)], -1)
         self.frames = np.ascontiguousarray(np.asarray(frames, float)[:, None, None, :, :])
         self.rho = float(rho)
 
@@ -85,4 +96,8 @@ class BladeStrips:
         force[..., 2] = qc * (-cl * W2 + cd * W3) / w
         moment = np.zeros(W.shape, dtype=force.dtype)
         moment[..., 0] = qc * self.chord * cm
+        if self.ac_offset is not None:
+            # d x F: d and F both lie in the chord plane, so only about B1
+            d = self.ac_offset
+            moment[..., 0] += d[..., 1] * force[..., 2] - d[..., 2] * force[..., 1]
         return force, moment, {"alpha": alpha, "w": w, "cl": cl, "cd": cd}

@@ -33,49 +33,48 @@ import numpy as np
 
 from ..model import Aerodynamics, Beam, BeamDamping, Polar
 from ..numerics.rotations import skew
-from .hawc2_files import (TIMOSHENKO_COLUMNS, HawcFileError, model_folder, read_ae, read_htc,
-                          read_pc, read_st)
+from .hawc2_files import (FPM_COLUMNS, TIMOSHENKO_COLUMNS, HawcFileError, model_folder,
+                          read_ae, read_htc, read_pc, read_st)
 from .hawc2_layout import c2_sections
 from .imported import BladeAxis, sections_from_matrices, untwist_sections
 from .turbine_yaml import TurbineFileError
 
-__all__ = ["hawc2_body", "hawc2_aerodynamics", "timoshenko_matrices", "thickness_polar",
-           "body_st", "body_damping"]
+__all__ = ["hawc2_body", "hawc2_aerodynamics", "timoshenko_matrices", "fpm_matrices",
+           "thickness_polar", "body_st", "body_damping"]
 
 
-def timoshenko_matrices(st: dict) -> tuple:
-    """(K, M) (n, 6, 6) in hawt's axes of the c2 section frame (twisted) at the c2 point,
-    from the st columns ``st`` (TIMOSHENKO_COLUMNS -> arrays of n stations)."""
+def _shear_and_bending_rows(st: dict, x, y) -> tuple:
+    """(B (n, 6, 6) from hawt's strains (g11, g12, g13, k1, k2, k3) at the c2 point to the
+    section's strains in its principal (pitched) axes: axial strain at the elastic centre,
+    shear strains at the point (x, y), twist rate, curvatures; cos and sin of the pitch)."""
     n = len(st["r"])
     a = np.radians(st["pitch"])
     c, s = np.cos(a), np.sin(a)
-    e2, e3, s2, s3 = st["x_e"], st["y_e"], st["x_sh"], st["y_sh"]
+    e2, e3 = st["x_e"], st["y_e"]
     B = np.zeros((n, 6, 6))
     one = np.ones(n)
-    # rows: axial strain at the elastic centre, principal shear strains at the shear
-    # centre, twist rate, principal curvatures; columns: g11, g12, g13, k1, k2, k3
     B[:, 0, 0], B[:, 0, 4], B[:, 0, 5] = one, e3, -e2
-    B[:, 1, 1], B[:, 1, 2], B[:, 1, 3] = c, s, -c * s3 + s * s2
-    B[:, 2, 1], B[:, 2, 2], B[:, 2, 3] = -s, c, s * s3 + c * s2
+    B[:, 1, 1], B[:, 1, 2], B[:, 1, 3] = c, s, -c * y + s * x
+    B[:, 2, 1], B[:, 2, 2], B[:, 2, 3] = -s, c, s * y + c * x
     B[:, 3, 3] = one
     B[:, 4, 4], B[:, 4, 5] = c, s
     B[:, 5, 4], B[:, 5, 5] = -s, c
-    E, G, A = st["E"], st["G"], st["A"]
-    D = np.zeros((n, 6, 6))
-    for k, v in enumerate((E * A, st["k_x"] * G * A, st["k_y"] * G * A, G * st["I_p"],
-                           E * st["I_x"], E * st["I_y"])):
-        D[:, k, k] = v
-    K = np.swapaxes(B, 1, 2) @ D @ B
+    return B, c, s
+
+
+def _mass_matrices(st: dict, c, s) -> np.ndarray:
+    """(n, 6, 6) section mass at the c2 point, hawt's axes of the c2 frame: m at the mass
+    centre (x_cg, y_cg), the radii of gyration ri_x, ri_y about the principal axes through
+    the elastic centre, moved to the c2 point (parallel axes through the mass centre)."""
+    n = len(st["r"])
     m = st["m"]
-    # second moments of the mass about the elastic centre in its principal axes, turned to
-    # (b2, b3), moved to the mass centre and then to the c2 point
     R = np.zeros((n, 2, 2))
     R[:, 0, 0], R[:, 0, 1], R[:, 1, 0], R[:, 1, 1] = c, -s, s, c
     Se = np.zeros((n, 2, 2))
     Se[:, 0, 0], Se[:, 1, 1] = m * st["ri_y"] ** 2, m * st["ri_x"] ** 2
     Se = R @ Se @ np.swapaxes(R, 1, 2)
     cg = np.stack([st["x_cg"], st["y_cg"]], -1)
-    d = cg - np.stack([e2, e3], -1)
+    d = cg - np.stack([st["x_e"], st["y_e"]], -1)
     S = Se - m[:, None, None] * d[:, :, None] * d[:, None, :] \
         + m[:, None, None] * cg[:, :, None] * cg[:, None, :]
     M = np.zeros((n, 6, 6))
@@ -87,7 +86,44 @@ def timoshenko_matrices(st: dict) -> tuple:
     M[:, 3, 3] = S[:, 0, 0] + S[:, 1, 1]
     M[:, 4, 4], M[:, 5, 5] = S[:, 1, 1], S[:, 0, 0]
     M[:, 4, 5] = M[:, 5, 4] = -S[:, 0, 1]
-    return K, M
+    return M
+
+
+def timoshenko_matrices(st: dict) -> tuple:
+    """(K, M) (n, 6, 6) in hawt's axes of the c2 section frame (twisted) at the c2 point,
+    from the st columns ``st`` (TIMOSHENKO_COLUMNS -> arrays of n stations)."""
+    n = len(st["r"])
+    # rows: axial strain at the elastic centre, principal shear strains at the shear
+    # centre, twist rate, principal curvatures; columns: g11, g12, g13, k1, k2, k3
+    B, c, s = _shear_and_bending_rows(st, st["x_sh"], st["y_sh"])
+    E, G, A = st["E"], st["G"], st["A"]
+    D = np.zeros((n, 6, 6))
+    for k, v in enumerate((E * A, st["k_x"] * G * A, st["k_y"] * G * A, G * st["I_p"],
+                           E * st["I_x"], E * st["I_y"])):
+        D[:, k, k] = v
+    K = np.swapaxes(B, 1, 2) @ D @ B
+    return K, _mass_matrices(st, c, s)
+
+
+#: BECAS's strain order (shear x, shear y, axial, bending x, bending y, twist) -> the rows of
+#: _shear_and_bending_rows (axial, shear x, shear y, twist, bending x, bending y)
+_BECAS_ROWS = (1, 2, 0, 4, 5, 3)
+
+
+def fpm_matrices(st: dict) -> tuple:
+    """(K, M) (n, 6, 6) as timoshenko_matrices, from an FPM st set (FPM_COLUMNS): its 6x6 at
+    the elastic centre in the principal (pitched) axes, on BECAS's strains, carried to
+    hawt's strains at the c2 point (K = B^T K_fpm B: the shear strains of the elastic
+    centre, its couplings kept as given)."""
+    n = len(st["r"])
+    Kf = np.zeros((n, 6, 6))
+    for i in range(6):
+        for j in range(i, 6):
+            Kf[:, i, j] = Kf[:, j, i] = st[f"K{i + 1}{j + 1}"]
+    B, c, s = _shear_and_bending_rows(st, st["x_e"], st["y_e"])
+    B = B[:, _BECAS_ROWS, :]
+    K = np.swapaxes(B, 1, 2) @ Kf @ B
+    return K, _mass_matrices(st, c, s)
 
 
 def _body(root, name: str, htc: Path):
@@ -129,7 +165,7 @@ def _c2_def(body, name: str, htc: Path, flip: bool = False) -> np.ndarray:
 
 def body_st(htc: Path, body, name: str) -> tuple:
     """(st columns {name: array}, st file path, 'set SET SUBSET' text) of a main body's
-    timoschenko_input (the FPM 6x6 form is refused)."""
+    timoschenko_input: TIMOSHENKO_COLUMNS, or FPM_COLUMNS with ``fpm 1``."""
     ti = body.block("timoschenko_input")
     if ti is None:
         raise TurbineFileError(str(htc), [f"main_body {name}: no timoschenko_input"])
@@ -138,9 +174,11 @@ def body_st(htc: Path, body, name: str) -> tuple:
         raise TurbineFileError(str(htc), [f"main_body {name}: timoschenko_input needs "
                                           "'filename' and 'set SET SUBSET'"])
     fpm = ti.command("fpm") or ti.command("FPM")
-    if fpm is not None and fpm.values[:1] == ["1"]:
-        raise TurbineFileError(str(htc), [f"main_body {name}: fpm 1 (a fully populated "
-                                          "6x6 st file) is not read yet; allowed: fpm 0"])
+    full = fpm is not None and fpm.values[:1] == ["1"]
+    if fpm is not None and fpm.values[:1] not in (["0"], ["1"]):
+        raise TurbineFileError(str(htc), [f"main_body {name}: fpm {' '.join(fpm.values)} "
+                                          f"(line {fpm.line}); allowed: 0 (Timoshenko) or 1 "
+                                          "(fully populated 6x6)"])
     # HAWC2 runs from the model's folder, usually the htc folder's parent
     tried = [(d / fname.values[0]).resolve() for d in (model_folder(htc), htc.parent)]
     st_path = next((p for p in tried if p.is_file()), None)
@@ -153,11 +191,13 @@ def body_st(htc: Path, body, name: str) -> tuple:
     except HawcFileError as exc:
         raise TurbineFileError(exc.file, [exc.message + (f" (line {exc.line})" if exc.line
                                                          else "")]) from None
-    if rows.shape[1] != len(TIMOSHENKO_COLUMNS):
+    columns = FPM_COLUMNS if full else TIMOSHENKO_COLUMNS
+    if rows.shape[1] != len(columns):
         raise TurbineFileError(str(st_path), [
-            f"set {sets.values[0]} subset {sets.values[1]}: {rows.shape[1]} columns; a "
-            f"Timoshenko set has {len(TIMOSHENKO_COLUMNS)}"])
-    st = {k: rows[:, j] for j, k in enumerate(TIMOSHENKO_COLUMNS)}
+            f"set {sets.values[0]} subset {sets.values[1]}: {rows.shape[1]} columns; "
+            f"{'an FPM' if full else 'a Timoshenko'} set has {len(columns)} (fpm "
+            f"{1 if full else 0} in {htc.name})"])
+    st = {k: rows[:, j] for j, k in enumerate(columns)}
     r = st["r"]
     if r[0] != 0 or np.any(np.diff(r) <= 0):
         raise TurbineFileError(str(st_path), [f"r = {r[:4].tolist()} ...: must start at 0 "
@@ -188,7 +228,7 @@ def hawc2_body(htc, name: str = "blade1", elements: int = 3, order: int = 6,
     """(Beam, notes) of the main body ``name`` of the HAWC2 model file ``htc`` (the notes
     also name every command and block of the body that is read but not modelled): its c2_def
     line (prebend and sweep; the twist turning the sections), its Timoshenko st set
-    (``timoschenko_input``; the FPM 6x6 form is refused) and its ``damping_posdef``.  The
+    (``timoschenko_input``; ``fpm 1``: the fully populated 6x6) and its ``damping_posdef``.  The
     stations are the st file's r over its last value, taken as fractions of the span
     along z.  ``flip``: the body's z points against its span (a tower: HAWC2's z is down),
     so its frame is turned half a turn about y first (x, z, the twist, the st file's x
@@ -205,7 +245,12 @@ def hawc2_body(htc, name: str = "blade1", elements: int = 3, order: int = 6,
     if flip:
         st = dict(st)
         for k in ("x_cg", "x_sh", "x_e", "pitch"):
-            st[k] = -st[k]
+            if k in st:
+                st[k] = -st[k]
+        if "K11" in st:
+            # the 6x6's couplings would have to be turned with the frame: not done yet
+            raise TurbineFileError(str(htc), [f"main_body {name}: an FPM st set (fpm 1) on a "
+                                              "tower is not read yet; allowed: fpm 0"])
     r = st["r"]
     x, y, z, twist_deg = secs.T
     length = float(z[-1] - z[0])
@@ -213,7 +258,7 @@ def hawc2_body(htc, name: str = "blade1", elements: int = 3, order: int = 6,
     axis = BladeAxis(np.stack([y, -x, z], -1), (z - z[0]) / length)
     stations, sweep, prebend = axis.stations(r / r[-1])
     twist = np.radians(np.interp(r / r[-1] * length + z[0], z, twist_deg))
-    K, M = timoshenko_matrices(st)
+    K, M = fpm_matrices(st) if "K11" in st else timoshenko_matrices(st)
     sec = sections_from_matrices(stations, untwist_sections(K, twist),
                                  untwist_sections(M, twist), prebend=prebend, sweep=sweep)
     notes = [f"{name}: {len(r)} st stations ({st_path.name} {set_text}), c2_def line of "
@@ -302,12 +347,11 @@ def hawc2_aerodynamics(htc, blade: int = 1) -> tuple:
     stations = r / r[-1]
     at = stations * (z[-1] - z[0]) + z[0]
     twist = np.radians(np.interp(at, z, twist_deg))
-    # HAWC2's aerodynamic centre: the quarter chord, a quarter of the chord from the c2 line
-    # (the half chord) towards the leading edge along the twisted chord line; hawt's b2
-    # (HAWC2's x) points to the leading edge: offsets along b2 (sweep) and b3 (prebend)
-    quarter = 0.25 * chord
-    ac_sweep = np.interp(at, z, x) - x[0] + quarter * np.cos(twist)
-    ac_prebend = np.interp(at, z, y) - y[0] + quarter * np.sin(twist)
+    # the aerodynamic nodes on the c2_def line (AeroDyn's BlCrvAC, -BlSwpAC); HAWC2's
+    # aerodynamic centre is the quarter chord, a quarter of the chord ahead of the c2 line
+    # (the half chord) towards the leading edge
+    ac_sweep = np.interp(at, z, x) - x[0]
+    ac_prebend = np.interp(at, z, y) - y[0]
     polars, index, key_of = [], [], {}
     for t, k in zip(thick, pcset.astype(int)):
         key = (k, round(float(t), 6))
@@ -325,7 +369,7 @@ def hawc2_aerodynamics(htc, blade: int = 1) -> tuple:
             notes.append(f"aero: {cmd.name} {' '.join(cmd.values)} (line {cmd.line}) read but "
                          "not taken (hawt's own aerodynamic models: docs/aerodynamics.md)")
     notes.append("aerodynamics: the loads act at the quarter chord (HAWC2's aerodynamic "
-                 "centre), a quarter chord ahead of the c2_def line")
+                 "centre), a quarter chord ahead of the c2_def line (ac_chordwise)")
     return Aerodynamics(stations=stations, chord=chord, twist=twist,
                         airfoil=np.array(index), polars=tuple(polars), ac_sweep=ac_sweep,
-                        ac_prebend=ac_prebend), notes
+                        ac_prebend=ac_prebend, ac_chordwise=0.25 * chord), notes

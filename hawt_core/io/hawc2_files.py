@@ -20,11 +20,19 @@ from typing import Optional
 import numpy as np
 
 __all__ = ["HtcBlock", "HtcCommand", "read_htc", "read_st", "read_ae", "read_pc",
-           "HawcFileError", "TIMOSHENKO_COLUMNS", "model_folder", "read_opt", "OPT_COLUMNS"]
+           "HawcFileError", "TIMOSHENKO_COLUMNS", "FPM_COLUMNS", "model_folder", "read_opt",
+           "OPT_COLUMNS"]
 
 #: The columns of a Timoshenko st subset (HAWC2 manual, "Structural data").
 TIMOSHENKO_COLUMNS = ("r", "m", "x_cg", "y_cg", "ri_x", "ri_y", "x_sh", "y_sh", "E", "G",
                       "I_x", "I_y", "I_p", "k_x", "k_y", "A", "pitch", "x_e", "y_e")
+
+#: The columns of a fully populated (FPM) st subset: the mass columns, the elastic centre and
+#: the principal axes' pitch, then the upper triangle of the 6x6 stiffness row by row
+#: (K11, K12, ..., K16, K22, ..., K66) on BECAS's strains (shear x, shear y, axial strain,
+#: bending about x, bending about y, twist rate) at the elastic centre, pitched axes.
+FPM_COLUMNS = ("r", "m", "x_cg", "y_cg", "ri_x", "ri_y", "pitch", "x_e", "y_e") + tuple(
+    f"K{i}{j}" for i in range(1, 7) for j in range(i, 7))
 
 
 class HawcFileError(ValueError):

@@ -66,7 +66,7 @@ def _table_dict(t: SectionTable) -> dict:
 def _aero_dict(a) -> dict:
     out = {"stations": a.stations.tolist(), "chord": _compact(a.chord),
            "twist": _compact(a.twist), "airfoil": [int(i) for i in a.airfoil]}
-    for key in ("ac_prebend", "ac_sweep", "cant"):
+    for key in ("ac_prebend", "ac_sweep", "cant", "ac_chordwise"):
         if getattr(a, key) is not None:
             out[key] = _compact(getattr(a, key))
     if a.skew_factor != PITT_PETERS_SKEW:

@@ -187,7 +187,8 @@ _TOP = {"name": False, "rotor": True, "hub": True, "nacelle": True, "blade": Tru
         "tower_aerodynamics": False}
 _TOWER_AERO = {"stations": True, "diameter": True, "drag": True}
 _AERO = {"stations": True, "chord": True, "twist": True, "airfoil": True, "polars": True,
-         "ac_prebend": False, "ac_sweep": False, "cant": False, "skew_factor": False}
+         "ac_prebend": False, "ac_sweep": False, "cant": False, "skew_factor": False,
+         "ac_chordwise": False}
 _POLAR = {"name": True, "alpha": True, "cl": True, "cd": True, "cm": True,
           "reynolds": False, "thickness": False}
 _DRIVETRAIN = {"stiffness": False, "damping": False, "generator_inertia": False,
@@ -472,7 +473,8 @@ def _aerodynamics(c: _Checker, value: Any) -> Optional[Aerodynamics]:
     polars = [_polar(c, p, f"{path}.polars[{i}]") for i, p in enumerate(polars)]
     parts = {k: c.per_station(d[k], f"{path}.{k}", ns, rule) for k, rule in
              (("chord", "> 0"), ("twist", "finite"), ("ac_prebend", "finite"),
-              ("ac_sweep", "finite"), ("cant", "angle")) if k in d}
+              ("ac_sweep", "finite"), ("cant", "angle"), ("ac_chordwise", "finite"))
+             if k in d}
     skew = c.number(d, "skew_factor", path, ">= 0", PITT_PETERS_SKEW)
     idx = None
     if "airfoil" in d:
