@@ -760,7 +760,13 @@ def read_openfast(path) -> ImportResult:
         blade = replace(blade, tip_mass=float(tips[0]))
         deck.notes.append(f"blade: a {tips[0]:g} kg point mass at the tip (TipMass)")
     tower = _tower(deck, ed_file, flexible_tower)
-    g = deck.number(MAIN, "Gravity", rule=">= 0")
+    # OpenFAST v3.1 moved Gravity from ElastoDyn's ENVIRONMENTAL CONDITION to the .fst
+    if "Gravity" in deck.vt[MAIN] or "Gravity" not in ed:
+        g = deck.number(MAIN, "Gravity", rule=">= 0")
+    else:
+        g = deck.number("ElastoDyn", "Gravity", rule=">= 0")
+        deck.notes.append(f"gravity: {g:g} m/s^2 from {edn} (Gravity was ElastoDyn's before "
+                          "OpenFAST v3.1)")
     name = fst.stem
     turbine = Turbine(name=name, rotor=Rotor(speed=rpm * math.pi / 30.0, blades=nb,
                                              precone=math.radians(cones[0]),
