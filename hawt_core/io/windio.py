@@ -95,12 +95,19 @@ class _File:
         return TurbineFileError(str(self.path), [f"{key}: {message}"])
 
     def _lookup(self, key: str) -> tuple:
-        """(found, value) at a dotted key (``components.hub.diameter``)."""
+        """(found, value) at a dotted key (``components.hub.diameter``; a list item as
+        ``layers[0]``)."""
         node = self.data
         for part in key.split("."):
-            if not isinstance(node, dict) or part not in node:
+            name, _, index = part.partition("[")
+            if not isinstance(node, dict) or name not in node:
                 return False, None
-            node = node[part]
+            node = node[name]
+            if index:
+                k = int(index.rstrip("]"))
+                if not isinstance(node, list) or not -len(node) <= k < len(node):
+                    return False, None
+                node = node[k]
         return True, node
 
     def get(self, key: str, required: bool = True, default=None):
@@ -209,6 +216,95 @@ V1_CONTROL = {"rated_rotor_speed": ("torque", "VS_maxspd"),
               "optimal_tsr": ("torque", "tsr")}
 
 
+#: WindIO 1.x rigid-body keys (WISDEM's elastic_properties_mb) -> 2.0's, which the converter
+#: of windio 2.x leaves behind: system_mass -> mass, system_inertia (about the body's mass
+#: centre; the hub's in its shaft-aligned axes, the nacelle's in the tower-top axes) ->
+#: inertia, system_center_mass (tower-top axes: x downwind, z up) -> location.
+V1_RIGID_BODY = {"system_mass": "mass", "system_inertia": "inertia",
+                 "system_center_mass": "location"}
+
+#: WISDEM's sizing inputs in 1.x files that the 2.0 schema does not allow and windio's
+#: converter leaves in: removed, each named (none is a property hawt models).
+V1_SIZING_KEYS = {"components.blade.structure.joint": ("bolt", "nonmaterial_cost",
+                                                       "reinforcement_layer_ps",
+                                                       "reinforcement_layer_ss"),
+                  "components.tower": ("tower_mass_user",),
+                  "components.monopile": ("monopile_mass_user",)}
+
+
+def _v1_masses(path: Path, v1: dict, data: dict, messages: list) -> None:
+    """The hub's, nacelle's and yaw system's masses of a 1.x file (``v1``, as read) put
+    where 2.0 has them in the converted ``data`` (V1_RIGID_BODY): hub.elastic_properties_mb
+    -> hub.elastic_properties; nacelle.elastic_properties_mb (WISDEM 3.x writes it there)
+    or nacelle.drivetrain.elastic_properties_mb (with spring_constant and
+    damping_coefficient) -> drivetrain.elastic_properties, their yaw_mass ->
+    yaw.elastic_properties.mass; a key of theirs that 2.0 has no place for is named."""
+    comps = v1.get("components") if isinstance(v1, dict) else None
+    out = data.get("components") if isinstance(data, dict) else None
+    if not isinstance(comps, dict) or not isinstance(out, dict):
+        return
+    nacelle = comps.get("nacelle") if isinstance(comps.get("nacelle"), dict) else {}
+    drivetrain = nacelle.get("drivetrain") if isinstance(nacelle.get("drivetrain"),
+                                                          dict) else {}
+    sources = [("hub", (comps.get("hub") or {}).get("elastic_properties_mb"),
+                "components.hub.elastic_properties_mb"),
+               ("drivetrain", nacelle.get("elastic_properties_mb"),
+                "components.nacelle.elastic_properties_mb"),
+               ("drivetrain", drivetrain.get("elastic_properties_mb"),
+                "components.nacelle.drivetrain.elastic_properties_mb")]
+    moved, left = [], []
+    # the converter keeps the hub's 1.x group (2.0 allows unknown keys there): moved, not
+    # left behind to be reported as unread
+    if isinstance(out.get("hub"), dict):
+        out["hub"].pop("elastic_properties_mb", None)
+    for target, group, where in sources:
+        if not isinstance(group, dict):
+            continue
+        body = out.setdefault(target, {}).setdefault("elastic_properties", {})
+        for key, value in group.items():
+            if key in V1_RIGID_BODY:
+                body[V1_RIGID_BODY[key]] = value
+                moved.append(f"{where}.{key} -> components.{target}.elastic_properties."
+                             f"{V1_RIGID_BODY[key]}")
+            elif key in ("spring_constant", "damping_coefficient") and target == "drivetrain":
+                body[key] = value
+                moved.append(f"{where}.{key} -> components.drivetrain.elastic_properties."
+                             f"{key}")
+            elif key == "yaw_mass":
+                out.setdefault("yaw", {}).setdefault("elastic_properties", {})["mass"] = value
+                moved.append(f"{where}.yaw_mass -> components.yaw.elastic_properties.mass")
+            else:
+                left.append(f"{where}.{key}")
+    # 2.0 requires a rigid body's location and inertia: a 1.x hub gives no mass centre (at
+    # the hub centre), a 1.x yaw system only its mass (a point mass at the tower top)
+    for target in ("hub", "yaw"):
+        body = (out.get(target) or {}).get("elastic_properties")
+        if isinstance(body, dict) and "mass" in body:
+            for key, zero in (("location", [0.0, 0.0, 0.0]), ("inertia", [0.0] * 6)):
+                if key not in body:
+                    body[key] = zero
+                    moved.append(f"components.{target}.elastic_properties.{key} = {zero} "
+                                 "(1.x gives none)")
+    if moved:
+        messages.append(f"{path.name}: the 1.x masses put where 2.0 has them (windio's "
+                        f"converter leaves them out): {'; '.join(moved)}")
+    removed = []
+    for where, keys in V1_SIZING_KEYS.items():
+        node = data
+        for part in where.split("."):
+            node = node.get(part) if isinstance(node, dict) else None
+        for key in keys:
+            if isinstance(node, dict) and key in node:
+                node.pop(key)
+                removed.append(f"{where}.{key}")
+    if removed:
+        messages.append(f"{path.name}: WISDEM's sizing inputs {', '.join(removed)} (1.x keys "
+                        "the 2.0 schema does not allow) removed")
+    if left:
+        messages.append(f"{path.name}: {', '.join(left)} read but not used (the inertia "
+                        "about the mass centre is taken; 2.0 has no place for these)")
+
+
 def _from_v1(path: Path, windIO, messages: list) -> dict:
     """A WindIO 1.x file (no ``windIO_version``) converted by windio's own converter
     (windIO.converters.windIO2windIO.v1p0_to_v2p0; its messages captured, a component it
@@ -239,6 +335,7 @@ def _from_v1(path: Path, windIO, messages: list) -> dict:
     messages.append(f"{path.name}: a WindIO 1.x file (no windIO_version): converted to 2.0 "
                     "by windio's converter (v1p0_to_v2p0), validated as 2.0 (windio 2.x ships "
                     "no 1.x schema)")
+    _v1_masses(path, windIO.load_yaml(path), data, messages)
     control = data.get("control")
     if isinstance(control, dict):
         filled = []
@@ -375,15 +472,59 @@ def _damping(f: _File, key: str):
                           "not modelled (undamped beams)")
 
 
+def _tower_elastic_properties(f: _File, key: str) -> tuple:
+    """(stations, {K44, K55, K66}, mass) of the tower's given beam properties."""
+    sk, st = f"{key}.stiffness_matrix", f"{key}.inertia_matrix"
+    gk, gm = f.grid(f"{sk}.grid"), f.grid(f"{st}.grid")
+    stations = np.union1d(gk, gm)
+    k = {n: np.interp(stations, gk, f.array(f"{sk}.{n}", gk.size)) for n in ("K44", "K55", "K66")}
+    mass = np.interp(stations, gm, f.array(f"{st}.mass", gm.size))
+    for n, v in list(k.items()) + [("mass", mass)]:
+        if np.any(v <= 0):
+            raise f.error(f"{sk if n != 'mass' else st}.{n}", "every value must be > 0")
+    return stations, k, mass
+
+
+def _tower_from_layers(f: _File, mat: dict, e: float, rho: float, outfit: float) -> tuple:
+    """(stations, {K44, K55, K66}, mass) of a tower given by its outer diameter and one
+    isotropic wall layer (WindIO's layers, as WISDEM's TowerSE sizes them): a circular tube
+    of outer diameter D and wall t, I = pi/64 (D^4 - (D - 2t)^4), EI = E I (both bending
+    axes), GJ = G 2I, mass = outfitting_factor x rho pi/4 (D^2 - (D - 2t)^2); D and t
+    linear between their grids' points, on the union of the grids."""
+    layers = f.get("components.tower.structure.layers", required=False) or []
+    if len(layers) != 1:
+        raise f.error("components.tower.structure.layers", f"{len(layers)} layers: without "
+                      "structure.elastic_properties hawt computes the tower from one wall "
+                      "layer; allowed: one")
+    lay = "components.tower.structure.layers[0].thickness"
+    dia = "components.tower.outer_shape.outer_diameter"
+    gd, gt = f.grid(f"{dia}.grid"), f.grid(f"{lay}.grid")
+    stations = np.union1d(gd, gt)
+    D = np.interp(stations, gd, f.array(f"{dia}.values", gd.size))
+    t = np.interp(stations, gt, f.array(f"{lay}.values", gt.size))
+    if np.any(t <= 0) or np.any(2 * t > D):
+        raise f.error(lay, "every wall thickness must be > 0 and at most half the outer "
+                           "diameter")
+    g = float(np.atleast_1d(mat.get("G", 0.0))[0])
+    if not g > 0:
+        nu = float(np.atleast_1d(mat.get("nu", 0.3))[0])
+        g = e / (2 * (1 + nu))
+    inner = D - 2 * t
+    i_area = np.pi / 64 * (D ** 4 - inner ** 4)
+    area = np.pi / 4 * (D ** 2 - inner ** 2)
+    f.notes.append(f"tower: beam properties of a circular steel tube from the outer diameter "
+                   f"and its one wall layer ({len(stations)} stations; E {e:g}, G {g:g}, rho "
+                   f"{rho:g}, outfitting factor {outfit:g} on the mass)")
+    return stations, {"K44": e * i_area, "K55": e * i_area, "K66": g * 2 * i_area}, \
+        outfit * rho * area
+
+
 def _tower(f: _File) -> Beam | None:
     """The tower beam (None: no tower given, rigid), clamped at its base."""
     if not f.has("components.tower"):
         f.notes.append("tower: none given (components.tower): rigid")
         return None
     key = "components.tower.structure.elastic_properties"
-    if not f.has(key):
-        raise f.error(key, "required: hawt needs the tower's beam properties (K44, K55, K66, "
-                           "mass); a tower given only by its layers needs them computed first")
     ref = "components.tower.reference_axis"
     _, z = f.curve(f"{ref}.z")
     for a in ("x", "y"):
@@ -394,14 +535,6 @@ def _tower(f: _File) -> Beam | None:
     height = float(z[-1] - z[0])
     if not height > 0:
         raise f.error(f"{ref}.z.values", f"{z[0]} .. {z[-1]} m: the top must be above the base")
-    sk, st = f"{key}.stiffness_matrix", f"{key}.inertia_matrix"
-    gk, gm = f.grid(f"{sk}.grid"), f.grid(f"{st}.grid")
-    stations = np.union1d(gk, gm)
-    k = {n: np.interp(stations, gk, f.array(f"{sk}.{n}", gk.size)) for n in ("K44", "K55", "K66")}
-    mass = np.interp(stations, gm, f.array(f"{st}.mass", gm.size))
-    for n, v in list(k.items()) + [("mass", mass)]:
-        if np.any(v <= 0):
-            raise f.error(f"{sk if n != 'mass' else st}.{n}", "every value must be > 0")
     # rotary inertia per length of a homogeneous wall: rho I = (rho / E) EI
     layers = f.get("components.tower.structure.layers", required=False) or []
     mats = {m.get("name"): m for m in (f.get("materials", required=False) or [])}
@@ -420,10 +553,16 @@ def _tower(f: _File) -> Beam | None:
                       "must be > 0")
     outfit = f.number("components.tower.structure.outfitting_factor", rule="> 0",
                       required=False, default=1.0)
+    source = key
+    if f.has(key):
+        stations, k, mass = _tower_elastic_properties(f, key)
+    else:
+        stations, k, mass = _tower_from_layers(f, mat, e, rho, outfit)
+        source = "the tube of components.tower.structure.layers"
     ei = 0.5 * (k["K44"] + k["K55"])
     i23 = outfit * rho / e * ei
     f.notes.append(f"tower: {height:g} m from z = {z[0]:g} m; bending K55 (fore-aft) and K44 "
-                   f"(side-side), torsion K66 and mass from {key}; rotary inertia "
+                   f"(side-side), torsion K66 and mass from {source}; rotary inertia "
                    f"{outfit:g} x rho/E x EI of {names[0]} (rho = {rho:g}, E = {e:g})")
     _damping(f, key)
     sec = SectionTable(stations=stations, mass=mass, i1=2 * i23, i2=i23, i3=i23, gj=k["K66"],
