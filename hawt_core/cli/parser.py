@@ -110,9 +110,9 @@ def step_deg_type(text: str) -> float:
 
 def turbine_arg(p):
     p.add_argument("turbine", nargs="?", default=None, metavar="TURBINE",
-                   help="a hawt turbine file (YAML), an OpenFAST deck (.fst) or the short "
-                        "name of a shipped turbine (hawt turbines); default: the paper's "
-                        "Table 1 turbine")
+                   help="a hawt turbine file (YAML), an OpenFAST deck (.fst), a HAWC2 "
+                        "model (.htc), a WindIO turbine file or the short name of a shipped "
+                        "turbine (hawt turbines); default: the paper's Table 1 turbine")
 
 
 def order_type(text: str) -> int:
