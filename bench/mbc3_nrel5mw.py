@@ -10,7 +10,9 @@ critical on every blade mode; gravity and the 5 deg shaft tilt on.
 
 hawt with the same switches: the shipped ``nrel5mw`` (the same blades, from the rosco
 wheel's deck) with the tower rigid, the yaw locked, the shaft rigid (no DrTrDOF) with the
-generator free and its torque trimmed by the steady state, 9 rpm, pitch 0, frozen wake,
+generator free, its torque trimmed by the steady state and its torque law's slope the
+deck's (ServoDyn's simple variable-speed law, region 2: 2 VS_Rgn2K omega_g, which
+OpenFAST's linearization keeps: its trim only offsets the torque), 9 rpm, pitch 0, frozen wake,
 quasi-steady airfoils; the blade's structural damping from the deck (modal 0.477465 %,
 docs/structural_damping.md).  Differences that remain: hawt's blades are beams (every mode,
 torsion included) where ElastoDyn has 3 assumed modes per blade without torsion; hawt's
@@ -47,6 +49,21 @@ OPENFAST = {
 }
 
 
+DECK = Path(__file__).resolve().parents[1] / "tests" / "data" / "openfast" / "NREL5MW" / \
+    "5MW_Land_Lin_Rotating" / "Main.fst"
+
+
+def deck_slope() -> float:
+    """The linearization deck's generator torque slope [N m s/rad, HSS]: its ServoDyn's simple
+    variable-speed law (VSContrl = 1) at 9 rpm, region 2 (2 VS_Rgn2K omega_g), as hawt's
+    OpenFAST importer reads it and OpenFAST linearizes it (the trim only offsets the torque)."""
+    import warnings
+    from hawt_core.io.openfast import read_openfast
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return read_openfast(DECK).turbine.drivetrain.generator_torque_slope
+
+
 def case(damped: bool = True, generator: str = "prescribed", upright: bool = False):
     """The shipped NREL 5-MW with the linearization's switches.  ``generator``
     "prescribed": no drivetrain (the rotor held at 9 rpm, hawt's default); "free": a rigid
@@ -56,7 +73,8 @@ def case(damped: bool = True, generator: str = "prescribed", upright: bool = Fal
     t = dc.replace(t, tower=None,
                    nacelle=dc.replace(t.nacelle, yaw_free=False),
                    drivetrain=None if generator == "prescribed" else dc.replace(
-                       t.drivetrain, stiffness=None, damping=0.0, generator="free"),
+                       t.drivetrain, stiffness=None, damping=0.0, generator="free",
+                       generator_torque_slope=deck_slope()),
                    rotor=dc.replace(t.rotor, speed=9 * math.pi / 30, pitch=0.0))
     if upright:
         t = dc.replace(t, gravity=dc.replace(t.gravity, enabled=False),

@@ -305,6 +305,11 @@ class Drivetrain:
     ``gearbox_ratio`` times the low-speed shaft (GBRatio); ``generator``: one of
     GENERATOR_MODES.  New DOFs (hawt_core.rigid.kane): the shaft twist (rotor azimuth minus
     the gearbox-input azimuth) and, with a free generator, the gearbox-input azimuth.
+    ``generator_torque_slope`` [N m s/rad, high-speed shaft]: with a free generator, the
+    slope dT/d(omega) of its torque law at the operating point (the torque is then the
+    trimmed or commanded torque plus the slope times the generator's speed change: an
+    electrical damping; ServoDyn's simple variable-speed law in region 2, T = K omega^2, has
+    2 K omega); 0: a torque that does not depend on the speed.
     """
 
     stiffness: Optional[float] = None
@@ -312,6 +317,7 @@ class Drivetrain:
     generator_inertia: float = 0.0
     gearbox_ratio: float = 1.0
     generator: str = "prescribed"
+    generator_torque_slope: float = 0.0
 
 
 @dataclass(frozen=True, eq=False)

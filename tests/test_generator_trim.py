@@ -154,3 +154,46 @@ def test_with_gravity_the_blade_modes_keep_their_labels_and_the_azimuth_is_small
             tip = np.abs(P[:, lay.blade(0).u[-1]]).max()
             assert az < 1e-2 * tip, (fam, whirl, az, tip)
             assert m[0].fixed_frame_hz == pytest.approx(h.fixed_frame_hz, rel=1e-3)
+
+
+def test_the_torque_laws_slope_damps_the_free_drivetrain():
+    """drivetrain.generator_torque_slope c [N m s/rad, HSS]: the generator torque grows by c
+    times its speed change, so the rotor speed's exponent becomes (dQ/dOmega - N^2 c) / J.
+    References: in a vacuum (no aerodynamic torque), -N^2 c / J with J the rotor's and
+    generator's inertia about the shaft (integrated here from the blade table), within 1 %
+    (the blades' lag flexibility couples in); in wind at 8 m/s, the rigid-rotor estimate
+    with the independent aerodynamic slope (as the test above), within 2 %.  c is the
+    NREL 5-MW linearization deck's ServoDyn simple variable-speed law in region 2,
+    2 VS_Rgn2K omega_g = 2 x 0.025576 N m/rpm^2 x 873 rpm x 30/pi (hand-computed here) =
+    426.43 N m s/rad, which the OpenFAST importer must read."""
+    import warnings
+    from pathlib import Path
+    from hawt_core.io.openfast import read_openfast
+    c = 2 * 0.025576 * (9 * 97) * 30 / math.pi
+    deck = Path(__file__).parent / "data" / "openfast" / "NREL5MW" / "5MW_Land_Lin_Rotating"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        got = read_openfast(deck / "Main.fst").turbine.drivetrain
+    assert got.generator == "free" and got.generator_torque_slope == pytest.approx(c, rel=1e-12)
+    t = _turbine()
+    t = dc.replace(t, drivetrain=dc.replace(t.drivetrain, generator_torque_slope=c))
+    N = t.drivetrain.gearbox_ratio
+    sec = t.blade.sections
+    x = sec.stations * t.blade.length
+    J = (t.rotor.blades * np.trapezoid(np.asarray(sec.mass) * (t.hub.radius + x) ** 2, x)
+         + t.hub.inertia_longitudinal + N ** 2 * t.drivetrain.generator_inertia)
+
+    def speed_exponent(res):
+        drive = [m for m in res.modes if m.family == "drivetrain"]
+        return min(m.real_per_rev * OMEGA for m in drive)
+
+    vac = modal_analysis(t, max_per_rev=20)
+    assert speed_exponent(vac) == pytest.approx(-N ** 2 * c / J, rel=1e-2)
+    d = 0.05 * math.pi / 30
+    y0 = AeroelasticBlade(t, 8.0, rotor_speed=OMEGA).steady_state()
+    slope = (_aero_torque(t, OMEGA + d, y0) - _aero_torque(t, OMEGA - d, y0)) / (2 * d)
+    wind = modal_analysis(t, wind=Wind(8.0), max_per_rev=20)
+    print(f"\nspeed exponent: vacuum {speed_exponent(vac):.6f} (estimate {-N**2 * c / J:.6f}), "
+          f"wind {speed_exponent(wind):.6f} (estimate {(slope - N**2 * c) / J:.6f}) 1/s")
+    assert speed_exponent(wind) == pytest.approx((slope - N ** 2 * c) / J, rel=2e-2)
+

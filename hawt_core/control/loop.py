@@ -78,12 +78,13 @@ class ActuatorLimits:
 
 def free_generator(turbine):
     """The turbine with its drivetrain's generator free (the rotor speed a DOF), the shaft
-    as the file has it; ValueError without a drivetrain."""
+    as the file has it, and no torque-law slope of its own (the controller's torque is the
+    generator's whole torque); ValueError without a drivetrain."""
     dt = turbine.drivetrain
     if dt is None:
         raise ValueError(f"turbine {turbine.name!r}: no drivetrain section, so no generator "
                          "for a controller to drive")
-    return replace(turbine, drivetrain=replace(dt, generator="free"))
+    return replace(turbine, drivetrain=replace(dt, generator="free", generator_torque_slope=0.0))
 
 
 #: Harmonics of the periodic state the closed loop starts from, and the interpolation error

@@ -15,7 +15,8 @@ What is read (all files relative to the ``.fst``):
   ElastoDyn blade is the blade (inextensible and shear-rigid, as ElastoDyn's) and the BeamDyn
   file of the same deck supplies what an ElastoDyn blade lacks (torsional rigidity, section
   rotary inertia);
-- ServoDyn: the yaw spring and damper (YawSpr, YawDamp) that hold the yaw DOF.
+- ServoDyn (io/openfast_servodyn.py): the yaw spring and damper (YawSpr, YawDamp) that hold
+  the yaw DOF, and with GenDOF the simple variable-speed law's slope (VSContrl = 1).
 
 Frames and signs (hawt_core.model): hawt's nacelle frame is (y1 up, y2 lateral, y3 downwind),
 ElastoDyn's (xn downwind, yn lateral to the left looking downwind, zn up), so a point
@@ -41,13 +42,14 @@ from pathlib import Path
 
 import numpy as np
 
-from ..model import (Beam, BeamDamping, Drivetrain, Gravity, Hub, Nacelle, Rotor, SectionTable,
+from ..model import (Beam, BeamDamping, Gravity, Hub, Nacelle, Rotor, SectionTable,
                      Turbine)
 from .imported import (ELEMENTS, IEC_TO_HAWT, BladeAxis, ImportResult, hub_yaw_share,
                        iec_axes_to_hawt, interp_stations, package_version,
                        sections_from_matrices, untwist_sections)
 from .openfast_keys import (KeyedFile, KeyedFileError, aerodyn_files, beamdyn_blade,
                             beamdyn_main, read_keyed)
+from .openfast_servodyn import drivetrain, servodyn_keys, yaw_spring
 from .turbine_yaml import TurbineFileError
 
 __all__ = ["ImportResult", "read_openfast", "IMPORTER", "ELEMENTS", "TOWER_STEEL"]
@@ -395,41 +397,6 @@ def _check_dofs(deck: _Deck, ed_file: str, nb: int):
     return all(tower), teeter
 
 
-def _drivetrain(deck: _Deck, ed_file: Path, servo: dict | None):
-    """ElastoDyn's DrTrDOF (shaft torsion, DTTorSpr/DTTorDmp) and GenDOF (a free generator,
-    GenIner x GBRatio^2 on the low-speed shaft) -> a hawt Drivetrain (None: both off, the
-    rotor turns at RotSpeed)."""
-    twist = deck.flag("ElastoDyn", "DrTrDOF")
-    free = deck.flag("ElastoDyn", "GenDOF")
-    if not (twist or free):
-        return None
-    ratio = deck.number("ElastoDyn", "GBRatio", rule="> 0")
-    if deck.number("ElastoDyn", "GBoxEff", rule="> 0") != 100.0:
-        deck.warnings.append(f"{ed_file.name}: GBoxEff = {deck.vt['ElastoDyn']['GBoxEff']} "
-                             "read but not modelled (an ideal gearbox)")
-    torque = servo.get("VSContrl") if servo is not None else 0
-    if free and torque:
-        # the generator torque comes from a controller hawt does not model (yet): a
-        # speed-regulated generator is closer to it than a torque-free one (no steady state
-        # under gravity with a free rotor)
-        free = False
-        deck.warnings.append(
-            f"{ed_file.name}: GenDOF = True with a generator-torque controller (ServoDyn "
-            f"VSContrl = {torque}), which is not modelled: hawt holds the generator at the rotor "
-            "speed (drivetrain.generator: prescribed)")
-    elif free:
-        deck.notes.append("drivetrain: a free generator (GenDOF = True, no generator torque "
-                          "controller) -- a zero-frequency rotation mode")
-    if not (twist or free):
-        return None                          # a rigid shaft at the held speed: the default
-    return Drivetrain(stiffness=deck.number("ElastoDyn", "DTTorSpr", rule="> 0") if twist
-                      else None,
-                      damping=deck.number("ElastoDyn", "DTTorDmp", rule=">= 0") if twist
-                      else 0.0,
-                      generator_inertia=deck.number("ElastoDyn", "GenIner", rule=">= 0"),
-                      gearbox_ratio=ratio, generator="free" if free else "prescribed")
-
-
 def _blade_beamdyn(deck: _Deck, comp: dict, nb: int):
     """BeamDyn blade (6x6 per station, hawt frame b, untwisted) or None when there is none."""
     fst = deck.vt["Fst"]
@@ -651,33 +618,6 @@ def _modal_damping(deck: _Deck, module: str, vt: dict, families: dict) -> BeamDa
     return BeamDamping(modal=modal)
 
 
-def _servodyn(deck: _Deck, comp: dict) -> dict | None:
-    """The deck's ServoDyn keys (None without ServoDyn, or when it cannot be read: warned)."""
-    if not comp["CompServo"]:
-        return None
-    try:
-        sd = deck.path(deck.fst.parent, deck.vt["Fst"]["ServoFile"], "ServoDyn")
-        deck.read_keys("ServoDyn", sd, lambda kf: deck.vt.__setitem__("ServoDyn",
-                                                                       dict(kf.values)))
-    except TurbineFileError as exc:
-        deck.warnings.append(f"ServoDyn not read ({exc}); the yaw spring and damper are 0 "
-                             "and no generator-torque controller is assumed")
-        return None
-    deck.warnings.append(f"{sd.name}: the pitch, torque and yaw controllers are not "
-                         "modelled (fixed pitch, no generator torque)")
-    return deck.vt["ServoDyn"]
-
-
-def _yaw_spring(deck: _Deck, servo: dict | None) -> tuple:
-    if servo is None:
-        return 0.0, 0.0
-    k = deck.number("ServoDyn", "YawSpr", rule=">= 0")
-    c = deck.number("ServoDyn", "YawDamp", rule=">= 0")
-    deck.notes.append(f"yaw bearing: spring {k:.6g} N m/rad and damper {c:.6g} N m s/rad "
-                      "from ServoDyn (YawSpr, YawDamp)")
-    return k, c
-
-
 def read_openfast(path) -> ImportResult:
     """Read an OpenFAST deck (the ``.fst`` file) into a hawt :class:`Turbine`.
 
@@ -743,8 +683,8 @@ def read_openfast(path) -> ImportResult:
         # ElastoDyn's hub: a mass at the apex with inertia about the shaft only
         hub = Hub(radius=hubr, teeter=False, inertia_lateral=0.0,
                   inertia_longitudinal=hub_iner, mass=hub_mass)
-    servo = _servodyn(deck, comp)
-    yaw_k, yaw_c = _yaw_spring(deck, servo)
+    servo = servodyn_keys(deck, comp)
+    yaw_k, yaw_c = yaw_spring(deck, servo)
     nac_yaw = deck.number("ElastoDyn", "NacYIner", rule=">= 0")
     cg = (deck.number("ElastoDyn", "NacCMzn"), -deck.number("ElastoDyn", "NacCMyn"),
           deck.number("ElastoDyn", "NacCMxn"))
@@ -773,7 +713,7 @@ def read_openfast(path) -> ImportResult:
                                              pitch=-math.radians(pitches[0])),
                       hub=hub, nacelle=nacelle, blade=blade, tower=tower,
                       gravity=Gravity(enabled=g > 0, g=g if g > 0 else 9.81),
-                      drivetrain=_drivetrain(deck, ed_file, servo),
+                      drivetrain=drivetrain(deck, ed_file, servo),
                       aerodynamics=_aerodynamics(deck, comp, nb, tip - hubr))
     turbine = replace(turbine, tower_aerodynamics=_tower_aerodynamics(deck, tower))
     return ImportResult(turbine=turbine, importer=IMPORTER, main_role=MAIN,

@@ -153,7 +153,9 @@ def dump_turbine(turbine: Turbine, header: str | None = None) -> str:
                               "damping": float(dt.damping),
                               "generator_inertia": float(dt.generator_inertia),
                               "gearbox_ratio": float(dt.gearbox_ratio),
-                              "generator": str(dt.generator)}
+                              "generator": str(dt.generator),
+                              **({"generator_torque_slope": float(dt.generator_torque_slope)}
+                                 if dt.generator_torque_slope else {})}
     if turbine.aerodynamics is not None:
         data["aerodynamics"] = _aero_dict(turbine.aerodynamics)
     ta = turbine.tower_aerodynamics

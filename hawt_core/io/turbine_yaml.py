@@ -192,7 +192,7 @@ _AERO = {"stations": True, "chord": True, "twist": True, "airfoil": True, "polar
 _POLAR = {"name": True, "alpha": True, "cl": True, "cd": True, "cm": True,
           "reynolds": False, "thickness": False}
 _DRIVETRAIN = {"stiffness": False, "damping": False, "generator_inertia": False,
-               "gearbox_ratio": False, "generator": False}
+               "gearbox_ratio": False, "generator": False, "generator_torque_slope": False}
 _ROTOR = {"speed": True, "blades": True, "precone": False, "pitch": False}
 _HUB = {"radius": True, "undersling": False, "teeter": True, "inertia_lateral": True,
         "inertia_longitudinal": True, "teeter_stiffness": False, "teeter_damping": False,
@@ -590,7 +590,13 @@ def _build(c: _Checker, data: Any, default_name: str) -> Optional[Turbine]:
                          damping=c.number(dt, "damping", "drivetrain", ">= 0", 0.0),
                          generator_inertia=c.number(dt, "generator_inertia", "drivetrain",
                                                     ">= 0", 0.0),
-                         gearbox_ratio=c.number(dt, "gearbox_ratio", "drivetrain", "> 0", 1.0))
+                         gearbox_ratio=c.number(dt, "gearbox_ratio", "drivetrain", "> 0", 1.0),
+                         generator_torque_slope=c.number(dt, "generator_torque_slope",
+                                                         "drivetrain", "finite", 0.0))
+            if parts["generator_torque_slope"] and gen != "free":
+                c.error("drivetrain.generator_torque_slope", "is the slope of a free "
+                        "generator's torque law: needs generator: free",
+                        parts["generator_torque_slope"])
             if len(c.errors) == n_errors:
                 if parts["stiffness"] is None and gen == "prescribed":
                     c.error("drivetrain", "a rigid shaft (no stiffness) with a prescribed "

@@ -157,6 +157,9 @@ class RigidSystem:
         #: generator rotor inertia about its axis (high-speed shaft) [kg m^2] and gear ratio
         self.generator_inertia = float(dt.generator_inertia) if dt is not None else 0.0
         self.gearbox_ratio = float(dt.gearbox_ratio) if dt is not None else 1.0
+        #: the generator torque law's slope dT/d(omega_g) [N m s/rad, HSS] (free generator)
+        self.generator_slope = (float(getattr(dt, "generator_torque_slope", 0.0))
+                                if self.generator_free else 0.0)
         self.active = (self.yaw_free, self.teeter, self.shaft_flexible, self.generator_free)
         names = (("yaw", "yaw_rate"), ("teeter", "teeter_speed"),
                  ("shaft_twist", "shaft_twist_rate"), ("generator_azimuth", "generator_rate"))
@@ -213,11 +216,18 @@ class RigidSystem:
         beta, rate = self.controls.pitch(t)
         return -beta - self.mesh_pitch, -rate
 
-    def _generator_torque_row(self, t):
-        """The generator torque's generalized force on the generator-speed row, (t.shape)."""
-        if self.controls is None or not self.generator_free:
+    def _generator_torque_row(self, t, U4=0.0):
+        """The generator torque's generalized force on the generator-speed row, (t.shape):
+        minus the gear ratio N times the torque, which is the controls' (trimmed or
+        commanded) torque plus the torque law's slope times the generator's speed change
+        N U4 (U4: the gearbox-input speed beyond Omega0)."""
+        if not self.generator_free:
             return 0.0
-        return -self.gearbox_ratio * self.controls.generator_torque(t)
+        N = self.gearbox_ratio
+        row = -N * N * self.generator_slope * U4 if self.generator_slope else 0.0
+        if self.controls is not None:
+            row = row - N * self.controls.generator_torque(t)
+        return row
 
     # ------------------------------------------------------------------ helpers
     def _split(self, x, n):
@@ -466,7 +476,7 @@ class RigidSystem:
         # yaw spring/damper between Y and the tower top: works only through U1; the
         # generator torque on the generator row
         drive = self._rows(yaw=-self.k_yaw * qy - self.c_yaw * U1,
-                           generator=self._generator_torque_row(t))
+                           generator=self._generator_torque_row(t, U4))
         F = F + np.concatenate([drive, np.zeros(drive.shape[:-1] + (6,))], -1)
         if self.teeter:
             qhdot = U1 * k["y1h2"] - U2
@@ -646,8 +656,8 @@ class RigidSystem:
             # shaft spring and damper on S about s3, reaction on the gearbox input E
             tau = -(self.k_shaft * qd + self.c_shaft * U3)[..., None] * s3
             F = F + _mv(k["wr_S"] - k["wr_E"], tau)
-        if self.controls is not None:
-            F = F + self._rows(generator=self._generator_torque_row(t))
+        if self.controls is not None or self.generator_slope:
+            F = F + self._rows(generator=self._generator_torque_row(t, U4))
         res = F + Fstar
         return self._join(*(res[..., r] for r in range(4)))
 
