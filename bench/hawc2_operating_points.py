@@ -20,7 +20,8 @@ states) at the same points, of the turbine ``hawt import hawc2`` makes of the mo
 blade: the c2_def line and Timoshenko sections; its loads at the quarter chord), and of the
 shipped structure (ElastoDyn + BeamDyn blade, reference line at the pitch axis) with the
 HAWC2 aerodynamics acting at that line.  Last, ``hawt operating-points`` on the imported
-turbine with HAWCStab2's schedule settings: hawt's rotor speed and pitch against HAWCStab2's.
+turbine with HAWCStab2's schedule settings: hawt's rotor speed and pitch against HAWCStab2's;
+and the DTU 10-MW model at its operation.dat's points (no power given: hawt's is shown).
 
     PYTHONPATH=. .venv/bin/python bench/hawc2_operating_points.py [--data DIR]
 """
@@ -97,6 +98,7 @@ def main() -> None:
             print(f"    {U:5.1f} | P {P:8.0f} {pe:8.0f} {100 * (pe / P - 1):+6.1f}% | T {T:6.0f} "
                   f"{te:6.0f} {100 * (te / T - 1):+6.1f}% | tip flap {m.tip_deflection(y)[0]:6.2f}")
     schedule_table(htc, opt)
+    dtu_table(root / "DTU_10_MW" / "htc" / "DTU_10MW_RWT.htc")
 
 
 def schedule_table(htc: Path, opt: np.ndarray) -> None:
@@ -127,6 +129,39 @@ def schedule_table(htc: Path, opt: np.ndarray) -> None:
               f"{p['pitch_deg'] - pi:+6.2f} | {pw:7.0f} {p['aero_power_kw']:7.0f} "
               f"{100 * (p['aero_power_kw'] / pw - 1):+6.1f}% | {th:6.0f} {p['thrust_kn']:6.0f} "
               f"{100 * (p['thrust_kn'] / th - 1):+6.1f}%")
+
+
+def dtu_table(htc: Path) -> None:
+    """The DTU 10-MW model's operation.dat (HAWCStab2's wind speed, pitch and rotor speed, no
+    power or thrust): hawt's aeroelastic power and thrust of the imported turbine at each
+    point.  HAWCStab2 computed the pitch above rated to hold its rated aerodynamic power, so
+    hawt's power there should be flat: its spread says how differently the two codes' blades
+    unload with pitch."""
+    from hawt_core.assembly.aero_blade import AeroelasticBlade
+    from hawt_core.io.hawc2_files import read_opt
+    from hawt_core.io.hawc2_turbine import read_hawc2
+    if not htc.is_file():
+        return
+    t0 = read_hawc2(htc).turbine
+    op = read_opt(htc.parent.parent / "data" / "operation.dat")
+    print("\nDTU 10-MW, hawt import hawc2, at operation.dat's points (HAWCStab2 gives no power)")
+    print(f"{'U':>5} {'pitch':>6} {'rpm':>5} | {'P hawt kW':>9} {'T hawt kN':>9} {'tip flap m':>10}")
+    y, above = None, []
+    for U, pitch, rpm in zip(op["wind_speed"], op["pitch"], op["rpm"]):
+        om = rpm * np.pi / 30.0
+        t = replace(t0, rotor=replace(t0.rotor, speed=om, pitch=-np.radians(pitch)))
+        m = AeroelasticBlade(t, U)
+        y = m.steady_state(y0=y if y is not None and y.size == m.n else None)
+        torque, thrust = m.root_loads(y)
+        p = 3 * torque * om / 1e3
+        if rpm >= op["rpm"].max() * (1 - 1e-6) and pitch > 0:
+            above.append(p)
+        print(f"{U:5.1f} {pitch:6.2f} {rpm:5.2f} | {p:9.0f} {3 * thrust / 1e3:9.0f} "
+              f"{m.tip_deflection(y)[0]:10.2f}")
+    if above:
+        a = np.array(above)
+        print(f"above rated (pitched, rated speed): hawt's power {a.min():.0f} .. {a.max():.0f} kW "
+              f"(spread {100 * (a.max() - a.min()) / a.mean():.1f} % of its mean)")
 
 
 if __name__ == "__main__":
