@@ -512,7 +512,7 @@ def _tower_from_layers(f: _File, mat: dict, e: float, rho: float, outfit: float)
     inner = D - 2 * t
     i_area = np.pi / 64 * (D ** 4 - inner ** 4)
     area = np.pi / 4 * (D ** 2 - inner ** 2)
-    f.notes.append(f"tower: beam properties of a circular steel tube from the outer diameter "
+    f.notes.append(f"tower: beam properties of a circular tube from the outer diameter "
                    f"and its one wall layer ({len(stations)} stations; E {e:g}, G {g:g}, rho "
                    f"{rho:g}, outfitting factor {outfit:g} on the mass)")
     return stations, {"K44": e * i_area, "K55": e * i_area, "K66": g * 2 * i_area}, \
