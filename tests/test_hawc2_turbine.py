@@ -255,3 +255,18 @@ def test_iea15mw_hawc2_model_reaches_hawcstab2s_operating_points():
         torque, thrust = m.root_loads(y)
         assert 3 * torque * om / 1e3 == pytest.approx(opt["power_kw"][k], rel=0.025)
         assert 3 * thrust / 1e3 == pytest.approx(opt["thrust_kn"][k], rel=0.025)
+
+
+def test_an_error_in_an_included_file_names_that_file(tmp_path):
+    """continue_in_file: the command's own file and line, not the main htc's."""
+    d = tmp_path / "m"
+    shutil.copytree(DATA, d)
+    orient = d / "IEA-15-240-RWT" / "IEA_15MW_RWT_WTG_orientation.htc"
+    text = orient.read_text()
+    orient.write_text(text.replace("mbdy1  tower last;", "mbdy1  tower 99;"))
+    line = 1 + text.split("\n").index(next(ln for ln in text.split("\n")
+                                           if "mbdy1  tower last;" in ln))
+    with pytest.raises(TurbineFileError) as e:
+        read_hawc2(d / IEA.relative_to(DATA))
+    assert e.value.source.endswith("IEA_15MW_RWT_WTG_orientation.htc")
+    assert f"line {line}" in str(e.value) and "node '99' of tower" in str(e.value)

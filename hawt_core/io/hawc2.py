@@ -34,7 +34,7 @@ import numpy as np
 from ..model import Aerodynamics, Beam, BeamDamping, Polar
 from ..numerics.rotations import skew
 from .hawc2_files import (FPM_COLUMNS, TIMOSHENKO_COLUMNS, HawcFileError, model_folder,
-                          read_ae, read_htc, read_pc, read_st)
+                          read_ae, read_htc, read_pc, read_st, where)
 from .hawc2_layout import c2_sections
 from .imported import BladeAxis, sections_from_matrices, untwist_sections
 from .turbine_yaml import TurbineFileError
@@ -177,7 +177,7 @@ def body_st(htc: Path, body, name: str) -> tuple:
     full = fpm is not None and fpm.values[:1] == ["1"]
     if fpm is not None and fpm.values[:1] not in (["0"], ["1"]):
         raise TurbineFileError(str(htc), [f"main_body {name}: fpm {' '.join(fpm.values)} "
-                                          f"(line {fpm.line}); allowed: 0 (Timoshenko) or 1 "
+                                          f"({where(fpm)}); allowed: 0 (Timoshenko) or 1 "
                                           "(fully populated 6x6)"])
     # HAWC2 runs from the model's folder, usually the htc folder's parent
     tried = [(d / fname.values[0]).resolve() for d in (model_folder(htc), htc.parent)]
@@ -206,8 +206,8 @@ def body_st(htc: Path, body, name: str) -> tuple:
 
 
 def body_damping(htc: Path, body, name: str) -> tuple:
-    """(BeamDamping or None, notes, the command taken) of a body's ``damping_posdef`` (or ``damping_aniso``,
-    taken by the same rule and said so)."""
+    """(BeamDamping or None, notes, the command taken) of a body's ``damping_posdef`` (or
+    ``damping_aniso``, taken by the same rule and said so)."""
     for key in ("damping_posdef", "damping_aniso"):
         dp = body.command(key)
         if dp is None:
@@ -273,7 +273,7 @@ def hawc2_body(htc, name: str = "blade1", elements: int = 3, order: int = 6,
     for cmd in body.commands:
         if cmd.name in read:
             continue
-        notes.append(f"{name}: {cmd.name} {' '.join(cmd.values)} (line {cmd.line}) read but "
+        notes.append(f"{name}: {cmd.name} {' '.join(cmd.values)} ({where(cmd)}) read but "
                      "not modelled" + (f" ({why[cmd.name]})" if cmd.name in why else ""))
     if body.command("nbodies") is not None:
         notes.append(f"{name}: nbodies {' '.join(body.command('nbodies').values)}: HAWC2's "
@@ -281,7 +281,7 @@ def hawc2_body(htc, name: str = "blade1", elements: int = 3, order: int = 6,
                      f"order {order}")
     for blk in body.blocks:
         if blk.name not in ("timoschenko_input", "c2_def"):
-            notes.append(f"{name}: block {blk.name} (line {blk.line}) read but not modelled")
+            notes.append(f"{name}: block {blk.name} ({where(blk)}) read but not modelled")
     return Beam(length=length, sections=sec, elements=elements, order=order,
                 damping=damping), notes
 
@@ -366,7 +366,7 @@ def hawc2_aerodynamics(htc, blade: int = 1) -> tuple:
     for cmd in aero.commands:
         if cmd.name not in ("nblades", "link", "ae_filename", "pc_filename", "ae_sets",
                             "hub_vec"):
-            notes.append(f"aero: {cmd.name} {' '.join(cmd.values)} (line {cmd.line}) read but "
+            notes.append(f"aero: {cmd.name} {' '.join(cmd.values)} ({where(cmd)}) read but "
                          "not taken (hawt's own aerodynamic models: docs/aerodynamics.md)")
     notes.append("aerodynamics: the loads act at the quarter chord (HAWC2's aerodynamic "
                  "centre), a quarter chord ahead of the c2_def line (ac_chordwise)")

@@ -21,7 +21,7 @@ import numpy as np
 
 __all__ = ["HtcBlock", "HtcCommand", "read_htc", "read_st", "read_ae", "read_pc",
            "HawcFileError", "TIMOSHENKO_COLUMNS", "FPM_COLUMNS", "model_folder", "read_opt",
-           "OPT_COLUMNS"]
+           "OPT_COLUMNS", "where"]
 
 #: The columns of a Timoshenko st subset (HAWC2 manual, "Structural data").
 TIMOSHENKO_COLUMNS = ("r", "m", "x_cg", "y_cg", "ri_x", "ri_y", "x_sh", "y_sh", "E", "G",
@@ -45,16 +45,21 @@ class HawcFileError(ValueError):
 
 @dataclass
 class HtcCommand:
+    """One command: its name, values, line and the file it is in (an included file's own,
+    through continue_in_file)."""
+
     name: str
     values: list
     line: int
+    file: str = ""
 
-    def numbers(self, file: str) -> list:
+    def numbers(self, file: str = "") -> list:
         try:
             return [float(v) for v in self.values]
         except ValueError:
-            raise HawcFileError(file, self.line, f"{self.name} {' '.join(self.values)}: "
-                                                 "numbers expected") from None
+            raise HawcFileError(self.file or file, self.line,
+                                f"{self.name} {' '.join(self.values)}: numbers expected"
+                                ) from None
 
 
 @dataclass
@@ -63,6 +68,7 @@ class HtcBlock:
     line: int
     commands: list = field(default_factory=list)
     blocks: list = field(default_factory=list)
+    file: str = ""
 
     def command(self, name: str) -> Optional[HtcCommand]:
         """The first command ``name`` of this block (None: absent)."""
@@ -79,6 +85,11 @@ class HtcBlock:
         for b in self.blocks:
             yield b
             yield from b.walk()
+
+
+def where(item) -> str:
+    """'FILE, line N' of a command or block (its own file, an included one's included)."""
+    return f"{Path(item.file).name}, line {item.line}" if item.file else f"line {item.line}"
 
 
 _TOKEN = re.compile(r'"[^"]*"|[^\s;]+')
@@ -130,7 +141,7 @@ def read_htc(path) -> HtcBlock:
         if word == "begin":
             if len(tok) < 2:
                 raise HawcFileError(file, i, "begin without a block name")
-            blk = HtcBlock(tok[1].lower(), i)
+            blk = HtcBlock(tok[1].lower(), i, file=file)
             stack[-1].blocks.append(blk)
             stack.append(blk)
         elif word == "end":
@@ -144,10 +155,11 @@ def read_htc(path) -> HtcBlock:
         elif word == "exit":
             break
         else:
-            stack[-1].commands.append(HtcCommand(word, [t.strip('"') for t in tok[1:]], i))
+            stack[-1].commands.append(HtcCommand(word, [t.strip('"') for t in tok[1:]], i,
+                                                 file=file))
     if len(stack) > 1:
-        raise HawcFileError(str(path), stack[-1].line, f"'begin {stack[-1].name}' is never "
-                                                       "closed")
+        raise HawcFileError(stack[-1].file, stack[-1].line, f"'begin {stack[-1].name}' is "
+                                                            "never closed")
     return root
 
 

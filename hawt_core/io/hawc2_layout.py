@@ -50,11 +50,11 @@ def c2_sections(body: HtcBlock, name: str, file: str) -> np.ndarray:
     """The body's c2_def sections (n, 4): x, y, z [m] in its own coordinates and twist [deg]."""
     c2 = body.block("c2_def")
     if c2 is None:
-        raise HawcFileError(file, body.line, f"main_body {name}: no c2_def")
+        raise HawcFileError(body.file or file, body.line, f"main_body {name}: no c2_def")
     secs = [c.numbers(file) for c in c2.all("sec")]
     if len(secs) < 2 or any(len(s) < 5 for s in secs):
-        raise HawcFileError(file, c2.line, f"main_body {name}: c2_def needs two or more "
-                                           "'sec NR x y z twist' lines")
+        raise HawcFileError(c2.file or file, c2.line, f"main_body {name}: c2_def needs two "
+                                                      "or more 'sec NR x y z twist' lines")
     return np.array([s[1:5] for s in secs])
 
 
@@ -104,6 +104,7 @@ class Joint:
     name: str = ""
     vector: Optional[list] = None
     line: int = 0
+    file: str = ""
 
 
 @dataclass
@@ -131,7 +132,7 @@ def _main_bodies(structure: HtcBlock, file: str) -> dict:
             continue
         cmd = blk.command("name")
         if cmd is None or not cmd.values:
-            raise HawcFileError(file, blk.line, "main_body without a name")
+            raise HawcFileError(blk.file or file, blk.line, "main_body without a name")
         blocks[cmd.values[0]] = blk
     bodies = {}
     for name, blk in blocks.items():
@@ -139,7 +140,7 @@ def _main_bodies(structure: HtcBlock, file: str) -> dict:
         while data.command("copy_main_body") is not None:
             src = data.command("copy_main_body").values[0]
             if src not in blocks or src in seen:
-                raise HawcFileError(file, data.command("copy_main_body").line,
+                raise HawcFileError(data.file or file, data.command("copy_main_body").line,
                                     f"main_body {name}: copy_main_body {src}: no such body "
                                     "(or a circle of copies)")
             seen.add(src)
@@ -151,11 +152,11 @@ def _main_bodies(structure: HtcBlock, file: str) -> dict:
 def _body_node(block: HtcBlock, which: str, bodies: dict, file: str):
     cmd = _command(block, which, which.replace("body", "mbdy"))
     if cmd is None or len(cmd.values) < 2 or cmd.values[0] not in bodies:
-        raise HawcFileError(file, block.line, f"{block.name}: '{which} NAME NODE' with a "
-                                              f"main body's name expected (found "
-                                              f"{' '.join(cmd.values) if cmd else 'none'})")
+        raise HawcFileError(block.file or file, block.line,
+                            f"{block.name}: '{which} NAME NODE' with a main body's name "
+                            f"expected (found {' '.join(cmd.values) if cmd else 'none'})")
     body = bodies[cmd.values[0]]
-    return body, body.node_index(cmd.values[1], file, cmd.line)
+    return body, body.node_index(cmd.values[1], cmd.file or file, cmd.line)
 
 
 def model_layout(root: HtcBlock, htc: Path) -> ModelLayout:
@@ -169,14 +170,15 @@ def model_layout(root: HtcBlock, htc: Path) -> ModelLayout:
     bodies = _main_bodies(structure, file)
     orientation = structure.block("orientation")
     if orientation is None or orientation.block("base") is None:
-        raise HawcFileError(file, structure.line, "new_htc_structure: no orientation block "
-                                                  "with a base")
+        raise HawcFileError(structure.file or file, structure.line,
+                            "new_htc_structure: no orientation block with a base")
     notes = []
     base_blk = orientation.block("base")
     cmd = _command(base_blk, "body", "mbdy")
     if cmd is None or not cmd.values or cmd.values[0] not in bodies:
-        raise HawcFileError(file, base_blk.line, "orientation base: 'body NAME' with a main "
-                                                 "body's name expected")
+        raise HawcFileError(base_blk.file or file, base_blk.line,
+                            "orientation base: 'body NAME' with a main body's name "
+                            "expected")
     base = bodies[cmd.values[0]]
     pos = _command(base_blk, "inipos")
     ang = [c.numbers(file) for n in ("body_eulerang", "mbdy_eulerang") for c in base_blk.all(n)]
@@ -192,28 +194,32 @@ def model_layout(root: HtcBlock, htc: Path) -> ModelLayout:
         b1, n1 = _body_node(blk, "body1", bodies, file)
         b2, n2 = _body_node(blk, "body2", bodies, file)
         if not b1.placed:
-            raise HawcFileError(file, blk.line, f"orientation relative: {b1.name} is used "
-                                                "before it is placed")
+            raise HawcFileError(blk.file or file, blk.line, f"orientation relative: "
+                                                            f"{b1.name} is used before it is "
+                                                            "placed")
         R = b1.R.copy()
         for c in blk.commands:
             if c.name in ("body2_eulerang", "mbdy2_eulerang"):
                 R = R @ rot_xyz(c.numbers(file)[:3])
             elif c.name.endswith("ini_rotvec_d1"):
-                notes.append(f"orientation of {b2.name}: {c.name} {' '.join(c.values)} (line "
-                             f"{c.line}): HAWC2's initial rotation speed, not geometry "
+                notes.append(f"orientation of {b2.name}: {c.name} {' '.join(c.values)} "
+                             f"({Path(c.file).name}, line {c.line}): HAWC2's initial "
+                             "rotation speed, not geometry "
                              "(hawt's rotor speed comes from the operational data)")
         b2.R, b2.parent, b2.placed = R, b1.name, True
         b2.origin = b1.node(n1) - b2.c2[n2, :3] @ R.T
     unplaced = [n for n, b in bodies.items() if not b.placed]
     if unplaced:
-        raise HawcFileError(file, orientation.line, "orientation: no placement of main "
-                                                    f"body {', '.join(unplaced)}")
+        raise HawcFileError(orientation.file or file, orientation.line,
+                            f"orientation: no placement of main body "
+                            f"{', '.join(unplaced)}")
     joints = []
     constraint = structure.block("constraint")
     for blk in (constraint.blocks if constraint is not None else []):
         if blk.name == "fix0":
             c = _command(blk, "body", "mbdy")
-            joints.append(Joint("fix0", None, c.values[0] if c else None, line=blk.line))
+            joints.append(Joint("fix0", None, c.values[0] if c else None, line=blk.line,
+                                file=blk.file))
             continue
         c1, c2 = _command(blk, "body1", "mbdy1"), _command(blk, "body2", "mbdy2")
         vec = blk.command("bearing_vector")
@@ -222,5 +228,5 @@ def model_layout(root: HtcBlock, htc: Path) -> ModelLayout:
                             c2.values[0] if c2 and c2.values else None,
                             name=name.values[0] if name and name.values else "",
                             vector=vec.numbers(file) if vec is not None else None,
-                            line=blk.line))
+                            line=blk.line, file=blk.file))
     return ModelLayout(bodies=bodies, joints=joints, base=base.name, notes=notes)

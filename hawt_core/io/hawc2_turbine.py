@@ -44,7 +44,7 @@ import numpy as np
 
 from ..model import (Drivetrain, Gravity, Hub, Nacelle, Rotor, TowerAerodynamics, Turbine)
 from .hawc2 import body_damping, body_st, hawc2_aerodynamics, hawc2_body
-from .hawc2_files import HawcFileError, model_folder, read_htc, read_opt
+from .hawc2_files import HawcFileError, model_folder, read_htc, read_opt, where
 from .hawc2_layout import ModelLayout, model_layout
 from .imported import ELEMENTS, ImportResult, hub_yaw_share, package_version
 from .turbine_yaml import TurbineFileError
@@ -116,10 +116,10 @@ def _body_masses(htc: Path, lay: ModelLayout, name: str, masses: _Masses, notes:
     for c in body.block.all("concentrated_mass"):
         v = c.numbers(str(htc))
         if len(v) < 8:
-            raise TurbineFileError(str(htc), [f"main_body {name}: concentrated_mass (line "
-                                              f"{c.line}) needs node, x, y, z, mass, Ixx, "
-                                              "Iyy, Izz"])
-        k = body.node_index(str(int(v[0])), str(htc), c.line)
+            raise TurbineFileError(c.file or str(htc), [
+                f"main_body {name}: concentrated_mass ({where(c)}) needs node, x, y, z, "
+                "mass, Ixx, Iyy, Izz"])
+        k = body.node_index(str(int(v[0])), c.file or str(htc), c.line)
         Ib = np.diag(v[5:8])
         if len(v) >= 11:
             Ib[0, 1] = Ib[1, 0] = v[8]
@@ -337,7 +337,7 @@ def read_hawc2(path, operation=None) -> ImportResult:
         J_gen += float(s3 @ I_g @ s3)
         if m:
             rot.add(m, p)
-            notes.append(f"{rj.body2}: concentrated_mass (line {c.line}) at the rotor bearing: "
+            notes.append(f"{rj.body2}: concentrated_mass ({where(c)}) at the rotor bearing: "
                          f"its {m:g} kg counted with the hub")
     M_h, c_h, I_h = rot.total()
     d_h = c_h - apex
@@ -392,12 +392,12 @@ def read_hawc2(path, operation=None) -> ImportResult:
     for blk in root.blocks:
         if blk.name in RUN_BLOCKS or blk.name in ("new_htc_structure", "aero", "aerodrag"):
             continue
-        warnings.append(f"block {blk.name} (line {blk.line}) read but not modelled" +
+        warnings.append(f"block {blk.name} ({where(blk)}) read but not modelled" +
                         {"dll": " (HAWC2's controllers: hawt runs its own or ROSCO)",
                          "wind": " (hawt's wind is set per analysis)"}.get(blk.name, ""))
     for j in lay.joints:
         if j.kind not in ("fix0", "fix1", "bearing1", "bearing2", "bearing3"):
-            warnings.append(f"constraint {j.kind} (line {j.line}) read but not modelled")
+            warnings.append(f"constraint {j.kind} ({where(j)}) read but not modelled")
     notes.append("pitch bearings (bearing2) held at the operating pitch: hawt's blades have "
                  "no pitch degree of freedom")
     turbine = Turbine(name=htc.stem, rotor=rotor, hub=hub, nacelle=nacelle, blade=blade,
@@ -471,7 +471,7 @@ def _tower_drag(root, tower_name: str, tower, file: str, notes: list):
             continue
         secs = np.array([c.numbers(file)[:3] for c in el.all("sec")])
         if secs.ndim != 2 or len(secs) < 2:
-            raise TurbineFileError(file, [f"aerodrag_element {tower_name} (line {el.line}): "
+            raise TurbineFileError(file, [f"aerodrag_element {tower_name} ({where(el)}): "
                                           "two or more 'sec z cd diameter' lines expected"])
         notes.append(f"tower drag: aerodrag_element {tower_name}, {len(secs)} sections")
         return TowerAerodynamics(stations=np.clip(secs[:, 0] / tower.length, 0, 1),
