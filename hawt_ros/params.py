@@ -61,8 +61,9 @@ DEFAULT_STEP_DEG = 2.0
 #: every parameter with dynamic typing so that ``-p step_deg:=1`` (an integer) is accepted
 #: where a float is expected).
 PARAMETERS: Dict[str, Tuple[Any, str]] = {
-    "turbine": (DEFAULT_TURBINE, "turbine YAML file, OpenFAST deck (.fst), WindIO file or "
-                                 "shipped name (hawt turbines): default the NREL 5-MW under "
+    "turbine": (DEFAULT_TURBINE, "turbine YAML file, OpenFAST deck (.fst), HAWC2 model "
+                                 "(.htc), WindIO file or shipped name (hawt turbines): "
+                                 "default the NREL 5-MW under "
                                  "ROSCO; 'paper' = the paper's Table 1 (in a vacuum); '' = "
                                  "the default"),
     "elements": (DEFAULT_ELEMENTS, "beam elements per blade, of the blade's order; 0 (the "
