@@ -753,7 +753,9 @@ def _alive(pids) -> set:
 def test_analysis_workers_end_with_the_node(spawn, sig):
     """A node stopped (SIGTERM) or killed (SIGKILL) while an analysis runs in a worker
     process leaves no process behind: every descendant (the forkserver and the worker) has
-    ended within 1 s of the node's exit."""
+    ended within 3 s of the node's exit (typically 0.1-0.3 s; the worker runs at a low
+    priority, and on a 2-core machine busy with the rest of the suite its wake-up was
+    measured at 1.04 s: a bound of 1 s made the test need an idle machine)."""
     from rclpy.action import ActionClient
     node, cli = spawn(REAL_TIME, fake="modal", env={"HAWT_FAKE_MODAL_SECONDS": "120"})
     ac = ActionClient(cli.node, ModalAnalysisAction, "/modal_analysis")
@@ -772,7 +774,7 @@ def test_analysis_workers_end_with_the_node(spawn, sig):
     took = time.monotonic() - t_exit
     print(f"\n{signal.Signals(sig).name}: {len(kids)} descendant(s) ended {took:.2f} s after "
           "the node")
-    assert not left and took < 1.0
+    assert not left and took < 3.0
 
 
 @ros
