@@ -35,12 +35,12 @@ from ..model import Aerodynamics, Beam, BeamDamping, Polar
 from ..numerics.rotations import skew
 from .hawc2_files import (FPM_COLUMNS, TIMOSHENKO_COLUMNS, HawcFileError, model_folder,
                           read_ae, read_htc, read_pc, read_st, where)
-from .hawc2_layout import c2_sections
+from .hawc2_layout import body_blocks, c2_sections
 from .imported import BladeAxis, sections_from_matrices, untwist_sections
 from .turbine_yaml import TurbineFileError
 
 __all__ = ["hawc2_body", "hawc2_aerodynamics", "timoshenko_matrices", "fpm_matrices",
-           "thickness_polar", "body_st", "body_damping"]
+           "thickness_polar", "body_st", "body_damping", "file_error"]
 
 
 def _shear_and_bending_rows(st: dict, x, y) -> tuple:
@@ -126,19 +126,21 @@ def fpm_matrices(st: dict) -> tuple:
     return K, _mass_matrices(st, c, s)
 
 
+def file_error(exc: HawcFileError) -> TurbineFileError:
+    """A HAWC2 file's error as the importers raise it: its file, message and line."""
+    return TurbineFileError(exc.file, [exc.message + (f" (line {exc.line})" if exc.line
+                                                      else "")])
+
+
 def _body(root, name: str, htc: Path):
     """The data block of main body ``name`` (a copy_main_body resolved to the body copied)."""
     structure = root.block("new_htc_structure")
     if structure is None:
         raise TurbineFileError(str(htc), ["no new_htc_structure block"])
-    blocks = {b.command("name").values[0]: b for b in structure.blocks
-              if b.name == "main_body" and b.command("name") is not None
-              and b.command("name").values}
-    seen = []
-    while name in blocks and blocks[name].command("copy_main_body") is not None \
-            and name not in seen:
-        seen.append(name)
-        name = blocks[name].command("copy_main_body").values[0]
+    try:
+        blocks = body_blocks(structure, str(htc))
+    except HawcFileError as exc:
+        raise file_error(exc) from None
     if name not in blocks:
         raise TurbineFileError(str(htc), [f"main_body {name!r} not found; the file has "
                                           f"{', '.join(blocks) or 'none'}"])
@@ -153,7 +155,7 @@ def _c2_def(body, name: str, htc: Path, flip: bool = False) -> np.ndarray:
     try:
         secs = c2_sections(body, name, str(htc))
     except HawcFileError as exc:
-        raise TurbineFileError(exc.file, [exc.message]) from None
+        raise file_error(exc) from None
     if flip:
         secs = secs * np.array([-1.0, 1.0, -1.0, -1.0])
     if np.any(np.diff(secs[:, 2]) <= 0):
@@ -173,7 +175,7 @@ def body_st(htc: Path, body, name: str) -> tuple:
     if fname is None or sets is None or len(sets.values) < 2:
         raise TurbineFileError(str(htc), [f"main_body {name}: timoschenko_input needs "
                                           "'filename' and 'set SET SUBSET'"])
-    fpm = ti.command("fpm") or ti.command("FPM")
+    fpm = ti.command("fpm")                     # read_htc lower-cases command names
     full = fpm is not None and fpm.values[:1] == ["1"]
     if fpm is not None and fpm.values[:1] not in (["0"], ["1"]):
         raise TurbineFileError(str(htc), [f"main_body {name}: fpm {' '.join(fpm.values)} "
@@ -189,8 +191,7 @@ def body_st(htc: Path, body, name: str) -> tuple:
     try:
         rows = read_st(st_path, int(float(sets.values[0])), int(float(sets.values[1])))
     except HawcFileError as exc:
-        raise TurbineFileError(exc.file, [exc.message + (f" (line {exc.line})" if exc.line
-                                                         else "")]) from None
+        raise file_error(exc) from None
     columns = FPM_COLUMNS if full else TIMOSHENKO_COLUMNS
     if rows.shape[1] != len(columns):
         raise TurbineFileError(str(st_path), [
@@ -224,7 +225,7 @@ def body_damping(htc: Path, body, name: str) -> tuple:
 
 
 def hawc2_body(htc, name: str = "blade1", elements: int = 3, order: int = 6,
-               flip: bool = False) -> tuple:
+               flip: bool = False, root=None) -> tuple:
     """(Beam, notes) of the main body ``name`` of the HAWC2 model file ``htc`` (the notes
     also name every command and block of the body that is read but not modelled): its c2_def
     line (prebend and sweep; the twist turning the sections), its Timoshenko st set
@@ -232,13 +233,13 @@ def hawc2_body(htc, name: str = "blade1", elements: int = 3, order: int = 6,
     stations are the st file's r over its last value, taken as fractions of the span
     along z.  ``flip``: the body's z points against its span (a tower: HAWC2's z is down),
     so its frame is turned half a turn about y first (x, z, the twist, the st file's x
-    offsets and principal-axis pitch change sign): a tower's (t1, t2, t3) = (-z, -x, y)."""
+    offsets and principal-axis pitch change sign): a tower's (t1, t2, t3) = (-z, -x, y).
+    ``root``: the htc file already read (read_htc), else it is read here."""
     htc = Path(htc)
     try:
-        root = read_htc(htc)
+        root = read_htc(htc) if root is None else root
     except HawcFileError as exc:
-        raise TurbineFileError(exc.file, [exc.message + (f" (line {exc.line})" if exc.line
-                                                         else "")]) from None
+        raise file_error(exc) from None
     body = _body(root, name, htc)
     st, st_path, set_text = body_st(htc, body, name)
     secs = _c2_def(body, name, htc, flip)
@@ -311,17 +312,18 @@ def thickness_polar(tables: list, thickness: float) -> tuple:
     return tuple(out)
 
 
-def hawc2_aerodynamics(htc, blade: int = 1) -> tuple:
+def hawc2_aerodynamics(htc, blade: int = 1, root=None) -> tuple:
     """(Aerodynamics, notes) of the htc file's ``aero`` block: the ae set of blade
     ``blade`` (radius, chord, relative thickness, pc set), its polars interpolated in
     thickness at every station as HAWC2 does (thickness_polar; one polar per distinct
     thickness), the aerodynamic twist from the linked body's c2_def (hawt's sign: the
     structural twist's), stations as fractions of the ae radius's last value.  HAWC2's
     model options (induction, tip loss, dynamic stall, aerosections) are named in the notes
-    as read but not taken: hawt's aerodynamics are its own."""
+    as read but not taken: hawt's aerodynamics are its own.  ``root``: the htc file already
+    read (read_htc), else it is read here."""
     htc = Path(htc)
     try:
-        root = read_htc(htc)
+        root = read_htc(htc) if root is None else root
         aero = root.block("aero")
         if aero is None:
             raise TurbineFileError(str(htc), ["no aero block"])
@@ -339,8 +341,7 @@ def hawc2_aerodynamics(htc, blade: int = 1) -> tuple:
         sets = {int(p) for p in ae[:, 3]}
         pcs = {k: read_pc(pc_path, k) for k in sets}
     except HawcFileError as exc:
-        raise TurbineFileError(exc.file, [exc.message + (f" (line {exc.line})" if exc.line
-                                                         else "")]) from None
+        raise file_error(exc) from None
     secs = _c2_def(_body(root, link.values[2], htc), link.values[2], htc)
     r, chord, thick, pcset = ae.T
     x, y, z, twist_deg = secs.T

@@ -28,7 +28,8 @@ import numpy as np
 
 from .hawc2_files import HawcFileError, HtcBlock
 
-__all__ = ["BodyPlace", "Joint", "ModelLayout", "model_layout", "c2_sections", "rot_xyz"]
+__all__ = ["BodyPlace", "Joint", "ModelLayout", "model_layout", "c2_sections", "rot_xyz",
+           "body_blocks"]
 
 
 def rot_xyz(angles_deg) -> np.ndarray:
@@ -125,7 +126,9 @@ class ModelLayout:
         return out[::-1]
 
 
-def _main_bodies(structure: HtcBlock, file: str) -> dict:
+def body_blocks(structure: HtcBlock, file: str) -> dict:
+    """Every main body's data block by name, a ``copy_main_body`` resolved to the body it
+    copies (HawcFileError for a body without a name, or a copy of no body or of itself)."""
     blocks = {}
     for blk in structure.blocks:
         if blk.name != "main_body":
@@ -134,7 +137,7 @@ def _main_bodies(structure: HtcBlock, file: str) -> dict:
         if cmd is None or not cmd.values:
             raise HawcFileError(blk.file or file, blk.line, "main_body without a name")
         blocks[cmd.values[0]] = blk
-    bodies = {}
+    data_of = {}
     for name, blk in blocks.items():
         data, seen = blk, {name}
         while data.command("copy_main_body") is not None:
@@ -145,8 +148,13 @@ def _main_bodies(structure: HtcBlock, file: str) -> dict:
                                     "(or a circle of copies)")
             seen.add(src)
             data = blocks[src]
-        bodies[name] = BodyPlace(name=name, block=data, c2=c2_sections(data, name, file))
-    return bodies
+        data_of[name] = data
+    return data_of
+
+
+def _main_bodies(structure: HtcBlock, file: str) -> dict:
+    return {name: BodyPlace(name=name, block=data, c2=c2_sections(data, name, file))
+            for name, data in body_blocks(structure, file).items()}
 
 
 def _body_node(block: HtcBlock, which: str, bodies: dict, file: str):

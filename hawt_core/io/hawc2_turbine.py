@@ -43,7 +43,7 @@ from typing import Optional
 import numpy as np
 
 from ..model import (Drivetrain, Gravity, Hub, Nacelle, Rotor, TowerAerodynamics, Turbine)
-from .hawc2 import body_damping, body_st, hawc2_aerodynamics, hawc2_body
+from .hawc2 import body_damping, body_st, file_error, hawc2_aerodynamics, hawc2_body
 from .hawc2_files import HawcFileError, model_folder, read_htc, read_opt, where
 from .hawc2_layout import ModelLayout, model_layout
 from .imported import ELEMENTS, ImportResult, hub_yaw_share, package_version
@@ -56,11 +56,6 @@ MAIN = "HAWC2 main"
 
 #: Top-level htc blocks that describe how HAWC2 runs, not the turbine: noted, not warned.
 RUN_BLOCKS = ("simulation", "output", "output_at_time", "hawcstab2")
-
-
-def _error(exc: HawcFileError) -> TurbineFileError:
-    return TurbineFileError(exc.file, [exc.message + (f" (line {exc.line})" if exc.line
-                                                      else "")])
 
 
 class _Masses:
@@ -155,7 +150,7 @@ def _operational_data(htc: Path, root, operation) -> tuple:
     try:
         return path, read_opt(path)
     except HawcFileError as exc:
-        raise _error(exc) from None
+        raise file_error(exc) from None
 
 
 def _roles(lay: ModelLayout, root, htc: Path) -> dict:
@@ -225,7 +220,7 @@ def read_hawc2(path, operation=None) -> ImportResult:
         root = read_htc(htc)
         lay = model_layout(root, htc)
     except HawcFileError as exc:
-        raise _error(exc) from None
+        raise file_error(exc) from None
     warnings, notes = [], list(lay.notes)
     roles = _roles(lay, root, htc)
     B = lay.bodies
@@ -299,8 +294,8 @@ def read_hawc2(path, operation=None) -> ImportResult:
                      "from the blades' leading edges (x)")
 
     # tower and blade beams
-    tower, tnotes = hawc2_body(htc, roles["tower"], flip=True, **ELEMENTS["tower"])
-    blade, bnotes = hawc2_body(htc, roles["blades"][0], **ELEMENTS["blade"])
+    tower, tnotes = hawc2_body(htc, roles["tower"], flip=True, root=root, **ELEMENTS["tower"])
+    blade, bnotes = hawc2_body(htc, roles["blades"][0], root=root, **ELEMENTS["blade"])
     notes += tnotes + bnotes
     for b in roles["blades"][1:]:
         if B[b].block is not blade_b.block:
@@ -381,7 +376,8 @@ def read_hawc2(path, operation=None) -> ImportResult:
     rotor = Rotor(speed=speed, blades=int(_blade_count(root, roles, file)), precone=cone,
                   pitch=built_pitch - math.radians(pitch_deg))
 
-    aerodynamics, anotes = hawc2_aerodynamics(htc) if aero is not None else (None, [])
+    aerodynamics, anotes = (hawc2_aerodynamics(htc, root=root) if aero is not None
+                            else (None, []))
     notes += anotes
     if aero is None:
         notes.append("no aero block: the turbine has no aerodynamics")
