@@ -63,8 +63,7 @@ def drivetrain(deck, ed_file: Path, servo: dict | None):
                           f"law (VSContrl = 1): its torque trimmed by the steady state, the "
                           f"law's slope at RotSpeed ({region}) {slope:.6g} N m s/rad (HSS) "
                           "kept (generator_torque_slope)")
-        torque = 0
-    if free and torque:
+    elif free and torque:
         # the generator torque comes from a controller hawt does not model (yet): a
         # speed-regulated generator is closer to it than a torque-free one (no steady state
         # under gravity with a free rotor)
@@ -73,7 +72,7 @@ def drivetrain(deck, ed_file: Path, servo: dict | None):
             f"{ed_file.name}: GenDOF = True with a generator-torque controller (ServoDyn "
             f"VSContrl = {torque}), which is not modelled: hawt holds the generator at the rotor "
             "speed (drivetrain.generator: prescribed)")
-    elif free and not slope:
+    if free and not slope:
         deck.notes.append("drivetrain: a free generator (GenDOF = True, no generator torque "
                           "controller) -- a zero-frequency rotation mode")
     if not (twist or free):

@@ -305,12 +305,13 @@ def _v1_masses(path: Path, v1: dict, data: dict, messages: list) -> None:
                         "about the mass centre is taken; 2.0 has no place for these)")
 
 
-def _from_v1(path: Path, windIO, messages: list) -> dict:
+def _from_v1(path: Path, v1: dict, windIO, messages: list) -> dict:
     """A WindIO 1.x file (no ``windIO_version``) converted by windio's own converter
     (windIO.converters.windIO2windIO.v1p0_to_v2p0; its messages captured, a component it
     could not convert refused with its traceback's last line), then its control block
     completed (V1_CONTROL, rpm as the converter leaves them) and the v1 groups the v2
-    schema does not allow removed, both told in ``messages``."""
+    schema does not allow removed, both told in ``messages``; ``v1``: the file as already
+    loaded (its masses, which the converter leaves behind: _v1_masses)."""
     import contextlib
     import io
     import tempfile
@@ -335,7 +336,7 @@ def _from_v1(path: Path, windIO, messages: list) -> dict:
     messages.append(f"{path.name}: a WindIO 1.x file (no windIO_version): converted to 2.0 "
                     "by windio's converter (v1p0_to_v2p0), validated as 2.0 (windio 2.x ships "
                     "no 1.x schema)")
-    _v1_masses(path, windIO.load_yaml(path), data, messages)
+    _v1_masses(path, v1, data, messages)
     control = data.get("control")
     if isinstance(control, dict):
         filled = []
@@ -372,7 +373,7 @@ def _validate(path: Path, messages: list | None = None):
         raise TurbineFileError(str(path), ["a WindIO turbine file is a mapping of keys "
                                            "(windIO_version, name, assembly, components)"])
     if "windIO_version" not in data and {"assembly", "components"} <= set(data):
-        data = _from_v1(path, windIO, messages)
+        data = _from_v1(path, data, windIO, messages)
     version = str(data.get("windIO_version", ""))
     if version.split(".")[0] not in VERSIONS:
         raise TurbineFileError(str(path), [
