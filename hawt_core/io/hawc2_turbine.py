@@ -226,7 +226,7 @@ def read_hawc2(path, operation=None) -> ImportResult:
     B = lay.bodies
     tower_b, blade_b = B[roles["tower"]], B[roles["blades"][0]]
     for b in roles["below"]:
-        warnings.append(f"main_body {b} (below the tower, line {B[b].block.line}) read but not "
+        warnings.append(f"main_body {b} (below the tower, {where(B[b].block)}) read but not "
                         "modelled: hawt clamps the tower at its base")
 
     # hawt's nacelle frame Y from the tower's: y1 up along the tower, y3 = its y (downwind)
@@ -267,8 +267,8 @@ def read_hawc2(path, operation=None) -> ImportResult:
     yaw_to_apex = -float(t_s)          # apex from the yaw axis along s3 (negative upwind)
     shaft_height = float(u_y)
     blade_z = blade_b.R[:, 2]
-    cone = float(math.asin(np.clip(blade_z @ s3, -1, 1)))
     cones = [float(math.asin(np.clip(B[b].R[:, 2] @ s3, -1, 1))) for b in roles["blades"]]
+    cone = cones[0]
     if max(cones) - min(cones) > 1e-9:
         raise TurbineFileError(file, [f"blade cones {np.degrees(cones).round(6).tolist()} "
                                       "deg differ: hawt's blades are identical"])
