@@ -47,9 +47,8 @@ from ..solvers.hill import hill_modes
 from ..solvers.multiblade import MultiBladeTransform
 from ..solvers.periodic import PeriodicSteadyState, periodic_steady_state
 from ..solvers.steady import constant_steady_state
-from .labels import (add_fixed_frame, exponent_fields, family_exponent, label_modes,
-                     mark_overdamped, number_modes,
-                     separate_degenerate_modes)
+from .labels import (add_fixed_frame, aerodynamic_lags, exponent_fields, family_exponent,
+                     label_modes, mark_overdamped, number_modes, separate_degenerate_modes)
 
 __all__ = ["modal_analysis", "periodic_dae", "validate_request", "Cancelled", "METHODS",
            "DEFAULT_STEPS", "DEFAULT_MAX_PER_REV", "STEPS_PER_CYCLE", "MIN_STEPS", "MAX_STEPS",
@@ -301,7 +300,8 @@ def _hill_floquet(model: TurbineModel, dae: LinearPeriodicDAE, transform, max_pe
     # tilt (weakly): the truncation is chosen by the exponents' convergence (hill_modes)
     hm = hill_modes(dae, max_per_rev * omega, observed=frame_rows, weights=wts ** 2,
                     truncation="converged" if transform is not None else "tail",
-                    fourier_tol=_fourier_tol(model))
+                    fourier_tol=_fourier_tol(model),
+                    internal=aerodynamic_lags(model) if transform is not None else None)
     M = int(min(MAX_SAMPLES, max(128, 2 ** np.ceil(np.log2(2.5 * max_per_rev)))))
     tm = np.arange(M) * T / M
     lam = hm.exponents

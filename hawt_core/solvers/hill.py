@@ -64,6 +64,12 @@ CONVERGED_TOL = 5e-5
 #: The estimated reduction error accepted for a heavily damped mode (|Re| > w) without a
 #: refinement on the whole pencil (hill._reduced_modes): relative to max(|eta|, w).
 HEAVY_TOL = 1e-3
+#: ... and for any mode of a system whose internal lags (the blades' aerodynamic states) the
+#: modal basis left out: the whole Hill pencil of such a system factorizes in minutes (IEA
+#: 15-MW at 11 m/s with Oye's inflow and Jones's lags: 530 s to refine one mode estimated at
+#: 6e-5, i.e. 6e-5 of its damping ratio 0.036); 2e-4 of max(|eta|, w) moves a damping ratio
+#: by at most 2e-4
+LAG_TOL = 2e-4
 #: Constant coefficients: dense QZ (after deflation) up to this many unknowns.
 DENSE_SIZE = 200
 
@@ -306,7 +312,8 @@ def hill_modes(dae: LinearPeriodicDAE, max_frequency: float, harmonics: Optional
                observed=None, weights=None, fourier_tol: float = 1e-10,
                coefficients: Optional[FourierCoefficients] = None,
                tail_tol: float = TAIL_TOL, truncation: str = "tail",
-               converged_tol: float = CONVERGED_TOL, modal_basis: bool = True) -> HillModes:
+               converged_tol: float = CONVERGED_TOL, modal_basis: bool = True,
+               internal=None) -> HillModes:
     """Hill eigenpairs with the dominant-harmonic frequency in ``[0, max_frequency]`` [rad/s].
 
     Constant coefficients (H = 0): the eigenpairs of the real pencil (A_0, E_0) with
@@ -329,7 +336,9 @@ def hill_modes(dae: LinearPeriodicDAE, max_frequency: float, harmonics: Optional
     whose real part exceeds half the width of the window that finds it (at least w / 2^8) is
     missed: heavily damped modes need their own search.  ``modal_basis`` (truncation
     "converged"): try the averaged system's modal basis first (hill_reduced.py; False: the
-    whole pencil at once, as a reference)."""
+    whole pencil at once, as a reference); ``internal``: a test (lam, X) -> bool of the
+    averaged system's modes the modal basis leaves out, their response taken whole (the
+    blades' aerodynamic lags: analyses/labels.aerodynamic_lags); they are not followed."""
     t0 = time.perf_counter()
     fc = coefficients if coefficients is not None else dae.fourier(tol=fourier_tol)
     t1 = time.perf_counter()
@@ -364,7 +373,7 @@ def hill_modes(dae: LinearPeriodicDAE, max_frequency: float, harmonics: Optional
         if modal_basis:     # weakly periodic: the averaged system's modal basis
             try:
                 found = _reduced_modes(fc, n, w, float(max_frequency), obs, wts, stats,
-                                       converged_tol)
+                                       converged_tol, internal)
             except (ReductionFailed, spla.ArpackError, np.linalg.LinAlgError):
                 pass        # it does not apply here: the whole pencil
         method = "whole pencil" if found is None else "modal basis"
@@ -496,7 +505,8 @@ def _converged_modes(fc, n: int, w: float, band: float, obs, wts, stats: dict, t
     return lam[order], V[:, :, order], tails[order], Hmax, change
 
 
-def _reduced_modes(fc, n: int, w: float, band: float, obs, wts, stats: dict, tol: float):
+def _reduced_modes(fc, n: int, w: float, band: float, obs, wts, stats: dict, tol: float,
+                   internal=None):
     """The "converged" truncation on the averaged system's modal basis
     (hill_reduced.reduced_converged_modes): (lam, V, tails, H, change).  Modes whose
     estimated reduction error (CORRECTION_TRUST x their second-order corrections) exceeds
@@ -507,10 +517,12 @@ def _reduced_modes(fc, n: int, w: float, band: float, obs, wts, stats: dict, tol
     caller then searches the whole band)."""
     mats = coefficient_matrices(fc)
     best = None
+    cache: dict = {}            # the averaged pencil's LU (and dense spectrum) for every margin
     for margin in BASIS_MARGINS:
         try:
             lam, V, tails, H, change, corrections = reduced_converged_modes(
-                mats, n, w, band, obs, wts, stats, tol, MAX_HARMONICS, margin=margin)
+                mats, n, w, band, obs, wts, stats, tol, MAX_HARMONICS, margin=margin,
+                internal=internal, cache=cache)
         except ReductionFailed:
             if best is None:
                 raise
@@ -521,7 +533,8 @@ def _reduced_modes(fc, n: int, w: float, band: float, obs, wts, stats: dict, tol
         # factorization of the whole Hill pencil per mode (IEA 15-MW at 8 m/s: 50 s instead
         # of 3.5 s) for digits its damping does not have; its estimate is reported in
         # ``change``
-        allowed = np.where(np.abs(lam.real) > w, max(tol, HEAVY_TOL), tol)
+        allowed = np.where(np.abs(lam.real) > w, max(tol, HEAVY_TOL),
+                           tol if internal is None else max(tol, LAG_TOL))
         weak = np.flatnonzero(estimate > allowed)
         if best is None or weak.size < best[-1].size:
             best = (lam, V, tails, H, change, estimate, allowed, weak)

@@ -24,7 +24,12 @@ Cost: a few sparse solves per mode instead of sparse LUs of the (2H + 1) n Hill 
 (NREL 5-MW at 8 m/s, 16 elements: 8.5 s -> 1.0 s).  ReductionFailed (and the whole-pencil
 search, hill.py) where the reduction does not apply: a defective averaged eigenvalue (a free
 yaw's double zero: no modal coordinates), a nearly degenerate cluster (ambiguous
-continuation), a strongly periodic system, two modes continuing into one exponent."""
+continuation), a strongly periodic system, two modes continuing into one exponent.
+
+Internal lags (the blades' aerodynamic states: hundreds of nearly equal, nearly parallel
+real exponents, which have no modal coordinates) are left out of the basis when the caller
+marks them (``internal``); their response enters whole through their modal expansion in the
+out-of-basis correction (_internal_tier, _out_of_basis)."""
 from __future__ import annotations
 
 import numpy as np
@@ -86,14 +91,41 @@ class ReductionFailed(RuntimeError):
 DENSE_SHARE = 0.2
 
 
-def _averaged_modes(A0, E0, radius: float, stats: dict):
-    """(Xr, Yr, lu, sigma): real bases Xr, Yr (n, r) of the right and left eigenvectors
-    of the real pencil (A0, E0) with |lambda| <= radius (real and imaginary parts of each
-    complex pair), ARPACK shift-invert about a small negative shift with one sparse LU."""
+class _Averaged:
+    """The averaged pencil's eigenpairs with |lambda| <= the basis radius and Im >= 0:
+    ``lam`` (m,), right vectors ``X`` (n, m), left vectors ``Y`` (n, m) (each column the
+    partner of X's: the nearest left eigenvalue's, or exact from one dense eigensolution:
+    ``dense``), the real LU of A0 - sigma E0 and ``sigma``."""
+
+    def __init__(self, lam, X, Y, lu, sigma: float, dense: bool = False):
+        self.lam, self.X, self.Y, self.lu, self.sigma = lam, X, Y, lu, sigma
+        self.dense = dense
+
+
+def _averaged_modes(A0, E0, radius: float, stats: dict, cache: dict,
+                    force_dense: bool = False) -> _Averaged:
+    """The averaged pencil's eigenpairs with |lambda| <= radius (_Averaged): ARPACK
+    shift-invert about a small negative shift with one sparse LU, or, once ARPACK would need
+    more than DENSE_SHARE of the spectrum (or ``force_dense``), one dense eigensolution of
+    the shift-inverted operator with both sides (exact partners, also within clusters of
+    nearly equal eigenvalues).  ``cache`` keeps the LU and a dense solution for wider
+    radii."""
     n = A0.shape[0]
-    sigma = -1e-3 * radius
-    lu = spla.splu(sp.csc_matrix(A0 - sigma * E0))
-    stats["factorizations"] = stats.get("factorizations", 0) + 1
+    eps = 1e-9 * radius
+    if "lu" not in cache:
+        sigma = -1e-3 * radius
+        cache["sigma"] = sigma
+        cache["lu"] = spla.splu(sp.csc_matrix(A0 - sigma * E0))
+        stats["factorizations"] = stats.get("factorizations", 0) + 1
+    lu, sigma = cache["lu"], cache["sigma"]
+
+    def within(lam):
+        return (np.abs(lam) <= radius) & (lam.imag >= -eps)
+
+    if "dense" in cache:
+        lam, X, Y = cache["dense"]
+        keep = within(lam)
+        return _Averaged(lam[keep], X[:, keep], Y[:, keep], lu, sigma, True)
     ET = sp.csc_matrix(E0.T)
 
     def count(x):
@@ -105,23 +137,34 @@ def _averaged_modes(A0, E0, radius: float, stats: dict):
     left = spla.LinearOperator((n, n), dtype=float,
                                matvec=lambda x: count(lu.solve(np.asarray(ET @ x), trans="T")))
 
-    def dense(transpose):
-        # the shift-inverted operator as a dense matrix: one LU solve with n right-hand sides
-        # and one dense eigensolution, cheaper than ARPACK once it would need many of them
-        B = (ET if transpose else sp.csc_matrix(E0)).toarray()
-        M = lu.solve(B, trans="T" if transpose else "N")
+    def dense():
+        # the shift-inverted operator M = (A0 - sigma E0)^-1 E0 as a dense matrix (one LU
+        # solve with n right-hand sides) and one dense eigensolution with both sides,
+        # cheaper than ARPACK once it would need many vectors.  A left vector u of M
+        # (u^H M = mu u^H) gives y = (A0 - sigma E0)^-T conj(u), one of the pencil's: exact
+        # partners, also within clusters of nearly equal eigenvalues
+        stats["dense"] = stats.get("dense", 0) + 1
+        M = lu.solve(sp.csc_matrix(E0).toarray())
         stats["solves"] = stats.get("solves", 0) + n
-        mu, V = sla.eig(M, overwrite_a=True, check_finite=False)
-        with np.errstate(divide="ignore"):
-            lam = sigma + 1.0 / mu                # mu = 0: an infinite eigenvalue
-        return lam, V, n
+        mu, U, V = sla.eig(M, left=True, right=True, overwrite_a=True, check_finite=False)
+        finite = np.abs(mu) > 1e-14 * np.abs(mu).max()        # mu = 0: infinite lambda
+        lam = sigma + 1.0 / mu[finite]
+        up = lam.imag >= -1e-9 * np.abs(lam).max()
+        lam, X = lam[up], V[:, finite][:, up]
+        Y = _solve(lu, U[:, finite][:, up].conj(), trans="T")
+        stats["solves"] = stats.get("solves", 0) + Y.shape[1]
+        cache["dense"] = (lam, X, Y)
+        keep = within(lam)
+        return _Averaged(lam[keep], X[:, keep], Y[:, keep], lu, sigma, True)
 
-    def eigs(op, k, transpose):
+    if force_dense:
+        return dense()
+
+    def eigs(op, k):
         k = min(k, n - 2)
         while True:
             if k > DENSE_SHARE * n:
-                stats["dense"] = stats.get("dense", 0) + 1
-                return dense(transpose)
+                return None, None, k
             mu, V = spla.eigs(op, k=k, which="LM", tol=1e-13, ncv=min(n - 1, 2 * k + 20),
                               v0=arpack_start(n))
             lam = sigma + 1.0 / mu
@@ -129,27 +172,62 @@ def _averaged_modes(A0, E0, radius: float, stats: dict):
                 return lam, V, k
             k = min(2 * k, n - 2)
 
-    lam, X, k = eigs(right, 60, False)
-    lamL, Y, _ = eigs(left, k, True)    # the same spectrum: the count the right side needed
-    eps = 1e-9 * radius
-    keep = (np.abs(lam) <= radius) & (lam.imag >= -eps)
+    lam, X, k = eigs(right, 60)
+    if lam is None:
+        return dense()
+    lamL, Y, _ = eigs(left, k)   # the same spectrum: the count the right side needed
+    if lamL is None:
+        return dense()
+    keep = within(lam)
     lam, X = lam[keep], X[:, keep]
     # each right vector's left partner: the left eigenvalue nearest it or its conjugate (the
     # real basis spans both members of a pair)
     lamL = np.where(lamL.imag < -eps, lamL.conj(), lamL)
     Y = Y[:, [int(np.argmin(np.abs(lamL - l))) for l in lam]]
+    return _Averaged(lam, X, Y, lu, sigma)
 
-    def real_basis(V):
-        cols = []
-        for l, v in zip(lam, V.T):
-            if abs(l.imag) <= eps:                    # real eigenvalue: a real vector
-                k = int(np.argmax(np.abs(v)))
-                cols.append(np.real(v * np.conj(v[k]) / abs(v[k])))
-            else:
-                cols += [v.real, v.imag]
-        return np.linalg.qr(np.column_stack(cols))[0] if cols else np.zeros((n, 0))
 
-    return real_basis(X), real_basis(Y), lu, sigma
+def _real_basis(lam, V, eps: float) -> np.ndarray:
+    """An orthonormal real basis (n, r) of the eigenvectors V (n, m) of a real pencil with
+    eigenvalues lam (Im >= 0): a real eigenvalue's vector made real, a complex one's real
+    and imaginary parts (they span both members of the pair)."""
+    cols = []
+    for l, v in zip(lam, V.T):
+        if abs(l.imag) <= eps:                    # real eigenvalue: a real vector
+            k = int(np.argmax(np.abs(v)))
+            cols.append(np.real(v * np.conj(v[k]) / abs(v[k])))
+        else:
+            cols += [v.real, v.imag]
+    return np.linalg.qr(np.column_stack(cols))[0] if cols else np.zeros((V.shape[0], 0))
+
+
+def _internal_tier(av: _Averaged, internal, E0, eps: float, w: float):
+    """(lam, X, Y) of the averaged modes ``internal`` marks (the blades' aerodynamic lags:
+    analyses/labels.aerodynamic_lags), both members of each complex pair, Y^T E0 X = I:
+    their response enters whole through their modal expansion, not as modal coordinates
+    (hundreds of nearly equal lags with nearly parallel vectors: no Loewdin partition)."""
+    mask = np.asarray(internal(av.lam, av.X), bool)
+    if not mask.any():
+        return mask, None
+    # a mode nearly parallel to an internal one with a nearly equal eigenvalue joins it (a
+    # nearly defective pair split between the basis and the expansion would be counted
+    # twice: Oye's slow inflow lags, one of them dragging some structure along)
+    U = av.X / np.linalg.norm(av.X, axis=0)
+    while True:
+        rest = np.flatnonzero(~mask)
+        cos = np.abs(U[:, rest].conj().T @ U[:, mask])
+        near = np.abs(av.lam[rest][:, None] - av.lam[mask][None, :]) <= DEGENERATE * w
+        joins = rest[np.any((cos > MAX_PARALLEL) & near, axis=1)]
+        if not joins.size:
+            break
+        mask[joins] = True
+    lam, X, Y = av.lam[mask], av.X[:, mask], av.Y[:, mask]
+    pair = np.abs(lam.imag) > eps
+    lam = np.concatenate([lam, lam[pair].conj()])
+    X = np.hstack([X, X[:, pair].conj()])
+    Y = np.hstack([Y, Y[:, pair].conj()])
+    norm = np.einsum("ij,ij->j", Y, np.asarray(E0 @ X))
+    return mask, (lam, X, Y / norm)
 
 
 def _modal_coordinates(Xr, Yr, A0, E0, scale: float):
@@ -241,7 +319,8 @@ class _ModalHill:
 
 
 def reduced_converged_modes(mats: dict, n: int, w: float, band: float, obs, wts, stats: dict,
-                            tol: float, max_harmonics: int, margin: float = BASIS_MARGIN):
+                            tol: float, max_harmonics: int, margin: float = BASIS_MARGIN,
+                            internal=None, cache: dict = None):
     """The exponents of the band 0 <= Im <= ``band``, |Re| <= w (Hill's "converged"
     truncation, see hill._converged_modes) on the averaged system's modal basis: (lam, V
     (2H+1, n, m), tails, H, change, corrections); ``corrections`` (m,): the size of each
@@ -250,9 +329,23 @@ def reduced_converged_modes(mats: dict, n: int, w: float, band: float, obs, wts,
     too strong for the reduction to be trusted (hill.py refines those modes on the whole
     pencil).  ``mats``: {j: (E_j, A_j)} the coefficients' complex
     harmonics as sparse matrices (hill.coefficient_matrices); ``margin``: the basis reaches
-    |lambda| <= margin x band.  Raises ReductionFailed when the reduction does not apply."""
+    |lambda| <= margin x band; ``internal``: a test (lam, X) -> bool of averaged modes kept
+    out of the basis (the blades' aerodynamic lags: their response is taken whole in the
+    out-of-basis correction, and they are not followed as exponents); ``cache``: a dict
+    that keeps the averaged pencil's LU and dense spectrum for a call with a wider margin.
+    Raises ReductionFailed when the reduction does not apply."""
     E0, A0 = (sp.csc_matrix(m.real) for m in mats[0])
-    Xr, Yr, lu, sigma = _averaged_modes(A0, E0, margin * band, stats)
+    cache = {} if cache is None else cache
+    av = _averaged_modes(A0, E0, margin * band, stats, cache)
+    eps_basis = 1e-9 * margin * band
+    if internal is not None and not av.dense and np.any(internal(av.lam, av.X)):
+        # internal modes need their exact left partners: the dense solution
+        av = _averaged_modes(A0, E0, margin * band, stats, cache, force_dense=True)
+    mask, tier = (_internal_tier(av, internal, E0, eps_basis, w) if internal is not None
+                  else (np.zeros(av.lam.size, bool), None))
+    Xr = _real_basis(av.lam[~mask], av.X[:, ~mask], eps_basis)
+    Yr = _real_basis(av.lam[~mask], av.Y[:, ~mask], eps_basis)
+    lu, sigma = av.lu, av.sigma
     if Xr.shape[1] != Yr.shape[1] or Xr.shape[1] == 0:
         raise ReductionFailed(f"the right and left bases differ ({Xr.shape[1]} vs "
                               f"{Yr.shape[1]} vectors)")
@@ -294,7 +387,8 @@ def reduced_converged_modes(mats: dict, n: int, w: float, band: float, obs, wts,
     for (e, c, dl) in found:
         p = (Xm @ c.reshape(L, -1).T).T                 # (L, n) harmonics of the vector
         q = (Ym @ dl.reshape(L, -1).T).T
-        e, p, size = _out_of_basis(e, p, q, c, dl, hill, mats, lu, sigma, E0, Xm, Ym, w)
+        e, p, size = _out_of_basis(e, p, q, c, dl, hill, mats, lu, sigma, E0, Xm, Ym, w,
+                                   tier)
         if e.imag < -eps:           # the conjugate solution: p_k -> conj(p_-k)
             e, p = e.conjugate(), p[::-1].conj()
         if any(abs(e - o) <= 1e-9 * w for o in lam) and abs(e.imag) > eps:
@@ -327,7 +421,7 @@ def reduced_converged_modes(mats: dict, n: int, w: float, band: float, obs, wts,
 
 
 def _out_of_basis(eta, p, q, c, dl, hill: _ModalHill, mats: dict, lu, sigma: float, E0, Xm,
-                  Ym, w: float):
+                  Ym, w: float, tier=None):
     """(eta, p, size) with the response outside the modal basis in every harmonic block:
     the residual blocks r_m = sum_k (A_{m-k} - (eta + i k w) E_{m-k}) p_k projected off the
     basis (Ym^T of it is zero), solved by the Neumann series of the averaged pencil's LU
@@ -336,18 +430,30 @@ def _out_of_basis(eta, p, q, c, dl, hill: _ModalHill, mats: dict, lu, sigma: flo
     relative to max(|eta|, w): both are second order in the coupling they stand for, so
     the error left is far smaller while they are small."""
     H = hill.H
-    L = 2 * H + 1
     kk = np.arange(-H, H + 1)
     R = _hill_apply(mats, p, eta, w)                    # the residual blocks r_m, columns
     B = -(R - E0 @ (Xm @ (Ym.T @ R)))
+    inner = 0.0
+    if tier is not None:
+        # the internal modes' response whole: x_j (y_j^T b) / (lambda_j - s) (they may lie
+        # near s, where the Neumann series about sigma would not converge)
+        lt, Xt, Yt = tier
+        C = Yt.T @ B                                    # (m, L)
+        inner = Xt @ (C / (lt[:, None] - (eta + 1j * kk * w)[None, :]))
+        B = B - E0 @ (Xt @ C)
     s = eta + 1j * kk * w - sigma                        # (L,)
     # the Neumann series of every block at once: one multi-column solve per term
-    term = _solve(lu, B)
+    def beyond(x):
+        # x without its components along the internal modes: round-off there would grow
+        # by ((s - sigma) / (lambda_j - sigma))^p in the series (Oye's slow lags, 1e-11)
+        return x if tier is None else x - Xt @ (Yt.T @ (E0 @ x))
+
+    term = beyond(_solve(lu, B))
     total = term.copy()
     for _ in range(NEUMANN_TERMS - 1):
-        term = s * _solve(lu, E0 @ term)
+        term = beyond(s * _solve(lu, E0 @ term))
         total += term
-    f = np.ascontiguousarray(total.T)                   # (L, n)
+    f = np.ascontiguousarray((total + inner).T)         # (L, n)
     # q^T T(eta) f over every block that f reaches
     num = np.sum(q.T * _hill_apply(mats, f, eta, w))
     Ec = hill.Eh @ c
@@ -375,9 +481,10 @@ def _hill_apply(mats: dict, v: np.ndarray, eta, w: float) -> np.ndarray:
     return out
 
 
-def _solve(lu, b: np.ndarray) -> np.ndarray:
-    """lu^{-1} b for a complex b (n,) or (n, k) with a real LU (one multi-column solve)."""
+def _solve(lu, b: np.ndarray, trans: str = "N") -> np.ndarray:
+    """lu^{-1} b (or lu^{-T} b) for a complex b (n,) or (n, k) with a real LU (one
+    multi-column solve)."""
     k = 1 if b.ndim == 1 else b.shape[1]
-    x = lu.solve(np.column_stack([b.real, b.imag]))
+    x = lu.solve(np.column_stack([b.real, b.imag]), trans=trans)
     x = x[:, :k] + 1j * x[:, k:]
     return x[:, 0] if b.ndim == 1 else x
