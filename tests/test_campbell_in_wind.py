@@ -124,6 +124,23 @@ def test_a_drifting_shape_keeps_its_track_in_wind():
     assert all(t.present().all() for t in tracks)
 
 
+def test_the_aerodynamic_states_lags_are_not_drawn():
+    """A sweep in wind with the blades' inflow states (Oye): their own lags (family
+    'aerodynamic', counted, not listed, in the mode tables) get no Campbell track, and the
+    structural modes beside them keep theirs (reference: the assignment by construction)."""
+    rng = np.random.default_rng(3)
+    Q, _ = np.linalg.qr(rng.normal(size=(12, 3)))
+    pts = []
+    for k in range(4):
+        p = _point([Q[:, 0], Q[:, 1], Q[:, 2]], [0.0, 0.6, 1.1], ["1st inflow aerodynamic",
+                   "A", "B"], speed=1.0, wind=5.0 + k)
+        p["modes"][0]["family"] = "aerodynamic"
+        pts.append(p)
+    tracks = track_modes(pts)
+    assert [t.label for t in tracks] == ["A", "B"]
+    assert all(t.present().all() for t in tracks)
+
+
 def test_unwrap_does_not_run_away_where_a_curve_levels_off():
     """Reference: a track that drops by 0.137 Hz between two coarse wind steps and then stays
     at 1.17 Hz (IEA 15-MW 2nd collective flap above rated, 7.52 rpm: 1P = 0.125 Hz): no

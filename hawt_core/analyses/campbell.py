@@ -260,10 +260,12 @@ def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
     step = int(st.get("blades", 1)) if st.get("fast") else 1
     max_shift = max(MAX_HARMONIC_SHIFT, step) if use_h else 0
     for i, p in enumerate(points):
-        modes = p["modes"]
+        # the blades' aerodynamic states' own lags are not drawn (the mode tables count them)
+        keep = [j for j, m in enumerate(p["modes"]) if m.get("family") != "aerodynamic"]
+        modes = [p["modes"][j] for j in keep]
         if not modes:
             continue
-        V = p["harmonics"] if use_h else p["vectors"][None]
+        V = (p["harmonics"] if use_h else p["vectors"][None])[..., keep]
         w = float(p.get("speed", np.nan))
         if not tracks:
             for j, m in enumerate(modes):

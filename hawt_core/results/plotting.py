@@ -516,8 +516,11 @@ def plot_campbell(result, path, max_hz=None, max_rays: int = 12, tracks="table2"
     how = ((f"{st.get('method')} {rng[0]}" + (f"-{rng[1]}" if rng[1] != rng[0] else "")
             + " steps/period") if st.get("method") in ("radau", "paper")
            else f"{st.get('method')}")
+    aero = st.get("aerodynamics", "")
+    model = ", ".join(["BEM", "Oye's inflow" if "Oye" in aero else "frozen wake"]
+                      + (["Jones's airfoils"] if "Jones" in aero else []))
     ax.set_title(f"Campbell diagram: {st.get('turbine', '')}"
-                 + (" in wind (frozen-wake BEM)" if wind is not None else "") + "\n"
+                 + (f" in wind ({model})" if wind is not None else "") + "\n"
                  f"{st.get('elements')} elements, {how}, {frame} frame", fontsize=10)
     ax.grid(True, alpha=0.3)
     axd.axhline(0.0, color="0.5", lw=0.8)

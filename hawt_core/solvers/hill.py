@@ -68,7 +68,8 @@ HEAVY_TOL = 1e-3
 #: modal basis left out: the whole Hill pencil of such a system factorizes in minutes (IEA
 #: 15-MW at 11 m/s with Oye's inflow and Jones's lags: 530 s to refine one mode estimated at
 #: 6e-5, i.e. 6e-5 of its damping ratio 0.036); 2e-4 of max(|eta|, w) moves a damping ratio
-#: by at most 2e-4
+#: by at most 2e-4.  Such a system's modes above it are kept too, with a warning and their
+#: estimate in ``change`` (no whole-pencil refinement)
 LAG_TOL = 2e-4
 #: Constant coefficients: dense QZ (after deflation) up to this many unknowns.
 DENSE_SIZE = 200
@@ -544,6 +545,14 @@ def _reduced_modes(fc, n: int, w: float, band: float, obs, wts, stats: dict, tol
     # at 11 m/s, band 3.4 Hz: two flap modes refined on the whole pencil, 28 s; with the
     # wider basis none, 4 s): the wider basis is tried before any refinement
     lam, V, tails, H, change, estimate, allowed, weak = best
+    if weak.size and internal is not None:
+        # with the aerodynamic lags the whole pencil factorizes in minutes per mode: the
+        # modes are kept at their estimate, reported in ``change`` and said
+        warnings.warn(f"Hill's modal basis: {weak.size} mode(s) kept at an estimated "
+                      f"reduction error up to {estimate[weak].max():.1e} (above "
+                      f"{LAG_TOL:.0e}; not refined on the whole pencil, which the "
+                      "aerodynamic states make too large)", RuntimeWarning, stacklevel=3)
+        return lam, V, tails, H, max(change, float(estimate.max()))
     change = max([change, *estimate[estimate <= allowed]])
     if not weak.size:
         return lam, V, tails, H, change
