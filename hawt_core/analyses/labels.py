@@ -185,9 +185,10 @@ def _aerodynamic_state(model: TurbineModel, fl, i: int, x) -> Optional[str]:
 #: (kept out of Hill's modal basis) when it does not oscillate in the blade frame (its
 #: frequency within LAG_OSCILLATION x its decay rate of a multiple of the rotor speed: a
 #: cyclic order's, or a Hill copy's) and its largest aerodynamic state exceeds
-#: AERODYNAMIC_SHARE times its structural motion.  Measured on the IEA 15-MW at 11 m/s with Oye's inflow and Jones's lags (3
-#: elements of order 6): the structural modes' ratio at most 7.4 (the overdamped cyclic flap
-#: 6.5-8.4), the aerodynamic states' own modes 8.2 .. 1e10.
+#: AERODYNAMIC_SHARE times its structural motion.  Measured on the IEA 15-MW at 11 m/s with
+#: Oye's inflow and Jones's lags (3 elements of order 6): the structural modes' ratio at
+#: most 7.4 (the overdamped cyclic flap 6.5-8.4), the aerodynamic states' own modes 8.2 ..
+#: 1e10.
 LAG_OSCILLATION = 0.1
 
 
