@@ -229,8 +229,8 @@ def test_with_aerodynamic_lags_the_modal_basis_equals_the_whole_pencil(monkeypat
         ref.exponents.imag / Omega)) > 0.1 * np.abs(ref.exponents.real))
     assert distance(ref.exponents[oscillating], got.exponents).max() <= hill.LAG_TOL
 
-    def without_lags(av, internal, E0, eps, w):
-        mask, (lam, X, Y) = tier_of(av, internal, E0, eps, w)
+    def without_lags(av, marked, E0, eps, w):
+        mask, (lam, X, Y) = tier_of(av, marked, E0, eps, w)
         return mask, (lam, X, 0.0 * Y)
     monkeypatch.setattr(hr, "_internal_tier", without_lags)
     crude = run(internal=lags).exponents

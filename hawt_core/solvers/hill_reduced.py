@@ -201,12 +201,13 @@ def _real_basis(lam, V, eps: float) -> np.ndarray:
     return np.linalg.qr(np.column_stack(cols))[0] if cols else np.zeros((V.shape[0], 0))
 
 
-def _internal_tier(av: _Averaged, internal, E0, eps: float, w: float):
-    """(lam, X, Y) of the averaged modes ``internal`` marks (the blades' aerodynamic lags:
-    analyses/labels.aerodynamic_lags), both members of each complex pair, Y^T E0 X = I:
-    their response enters whole through their modal expansion, not as modal coordinates
-    (hundreds of nearly equal lags with nearly parallel vectors: no Loewdin partition)."""
-    mask = np.asarray(internal(av.lam, av.X), bool)
+def _internal_tier(av: _Averaged, mask: np.ndarray, E0, eps: float, w: float):
+    """(mask, (lam, X, Y)) of the averaged modes ``mask`` marks (the blades' aerodynamic
+    lags: analyses/labels.aerodynamic_lags), widened by their nearly defective twins, both
+    members of each complex pair, Y^T E0 X = I: their response enters whole through their
+    modal expansion, not as modal coordinates (hundreds of nearly equal lags with nearly
+    parallel vectors: no Loewdin partition); (mask, None) when none is marked."""
+    mask = np.array(mask, bool)
     if not mask.any():
         return mask, None
     # a mode nearly parallel to an internal one with a nearly equal eigenvalue joins it (a
@@ -338,11 +339,12 @@ def reduced_converged_modes(mats: dict, n: int, w: float, band: float, obs, wts,
     cache = {} if cache is None else cache
     av = _averaged_modes(A0, E0, margin * band, stats, cache)
     eps_basis = 1e-9 * margin * band
-    if internal is not None and not av.dense and np.any(internal(av.lam, av.X)):
+    marked = np.zeros(av.lam.size, bool) if internal is None else internal(av.lam, av.X)
+    if np.any(marked) and not av.dense:
         # internal modes need their exact left partners: the dense solution
         av = _averaged_modes(A0, E0, margin * band, stats, cache, force_dense=True)
-    mask, tier = (_internal_tier(av, internal, E0, eps_basis, w) if internal is not None
-                  else (np.zeros(av.lam.size, bool), None))
+        marked = internal(av.lam, av.X)
+    mask, tier = _internal_tier(av, marked, E0, eps_basis, w)
     Xr = _real_basis(av.lam[~mask], av.X[:, ~mask], eps_basis)
     Yr = _real_basis(av.lam[~mask], av.Y[:, ~mask], eps_basis)
     lu, sigma = av.lu, av.sigma
@@ -426,7 +428,9 @@ def _out_of_basis(eta, p, q, c, dl, hill: _ModalHill, mats: dict, lu, sigma: flo
     the residual blocks r_m = sum_k (A_{m-k} - (eta + i k w) E_{m-k}) p_k projected off the
     basis (Ym^T of it is zero), solved by the Neumann series of the averaged pencil's LU
     about sigma, added to p; eta gets q^T T(eta) f / q^T E_h p (two-sided Rayleigh) and the
-    reduced pencil's own Rayleigh correction.  ``size``: the larger of the two corrections
+    reduced pencil's own Rayleigh correction.  ``tier``: (lam, X, Y) of the internal modes
+    left out of the basis (_internal_tier), whose share of the residual is solved by their
+    modal expansion instead of the series.  ``size``: the larger of the two corrections
     relative to max(|eta|, w): both are second order in the coupling they stand for, so
     the error left is far smaller while they are small."""
     H = hill.H
@@ -442,12 +446,13 @@ def _out_of_basis(eta, p, q, c, dl, hill: _ModalHill, mats: dict, lu, sigma: flo
         inner = Xt @ (C / (lt[:, None] - (eta + 1j * kk * w)[None, :]))
         B = B - E0 @ (Xt @ C)
     s = eta + 1j * kk * w - sigma                        # (L,)
-    # the Neumann series of every block at once: one multi-column solve per term
+
     def beyond(x):
         # x without its components along the internal modes: round-off there would grow
         # by ((s - sigma) / (lambda_j - sigma))^p in the series (Oye's slow lags, 1e-11)
         return x if tier is None else x - Xt @ (Yt.T @ (E0 @ x))
 
+    # the Neumann series of every block at once: one multi-column solve per term
     term = beyond(_solve(lu, B))
     total = term.copy()
     for _ in range(NEUMANN_TERMS - 1):
