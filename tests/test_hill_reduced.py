@@ -81,8 +81,9 @@ def test_nrel5mw_in_wind_equals_the_whole_pencil(nrel_8ms, monkeypatch):
     assert worst <= 2e-6 and mac > 0.9999, (worst, mac)
     assert got.change <= hill.CONVERGED_TOL
 
-    def no_correction(eta, p, *args):
-        return eta, p, 0.0
+    def no_correction(found, hill, mats, lu, sigma, E0, Xm, *args):
+        L = 2 * hill.H + 1
+        return [(eta, (Xm @ c.reshape(L, -1).T).T, 0.0) for eta, c, _ in found]
     monkeypatch.setattr(hr, "_out_of_basis", no_correction)
     crude = modes(nrel_8ms, 50.0)
     assert agreement(crude, ref, w)[0] > 1e-5
@@ -185,12 +186,15 @@ def test_with_aerodynamic_lags_the_modal_basis_equals_the_whole_pencil(monkeypat
     modes are the aerodynamic states' own lags, nearly equal and nearly parallel (no modal
     coordinates): the modal basis leaves them out (analyses/labels.aerodynamic_lags) and
     takes their response whole (hill_reduced._internal_tier).  Reference: the whole pencil
-    converged to 1e-7, on the modes its windows resolve (|Re| <= w / 8).  Every exponent
-    found there is within LAG_TOL (2e-4) of the reference's (measured 2e-5); every reference
-    mode that oscillates in the blade frame is found (no structural mode lost: the missing
-    ones are the inflow lags, named "aerodynamic" anyway); dropping the lags' response
+    converged to 1e-7, on the modes its windows resolve (|Re| <= w / 8; it has every mode
+    found up to w / 5, five of them, and none at 0.29 w).  Every exponent found up to w / 5
+    is within LAG_TOL (2e-4) of the reference's (measured 2.1e-5); every reference mode
+    within w / 8 that oscillates in the blade frame is found (beyond LAG_OSCILLATION; the
+    missing ones are the inflow lags, named "aerodynamic" anyway, and a collective inflow
+    mode at -0.091 1/s whose flap is 1/4.5 of its inflow, a nearly parallel twin of a lag
+    -0.0023 1/s away, taken whole with the lags: its cyclic twin is found); dropping the lags' response
     loses or moves exponents by > LAG_TOL (the term is needed and seen)."""
-    from hawt_core.analyses.labels import aerodynamic_lags
+    from hawt_core.analyses.labels import LAG_OSCILLATION, aerodynamic_lags
     from hawt_core.analyses.operating_points import at_operating_point
     t = load_paper_mesh("nrel5mw")
     at, _ = at_operating_point(t, 8.0, discon_schedule(shipped_controller("nrel5mw")), None)
@@ -222,12 +226,14 @@ def test_with_aerodynamic_lags_the_modal_basis_equals_the_whole_pencil(monkeypat
 
     def distance(a, b):
         return np.array([np.min(np.abs(b - e)) / max(abs(e), w) for e in a])
-    mine = got.exponents[np.abs(got.exponents.real) <= w / 8]
-    assert mine.size >= 6
+    mine = got.exponents[np.abs(got.exponents.real) <= w / 5]
+    assert mine.size >= 5
     assert distance(mine, ref.exponents).max() <= hill.LAG_TOL
-    oscillating = resolved & (np.abs(ref.exponents.imag - Omega * np.round(
-        ref.exponents.imag / Omega)) > 0.1 * np.abs(ref.exponents.real))
-    assert distance(ref.exponents[oscillating], got.exponents).max() <= hill.LAG_TOL
+    # the reference's modes not found: none oscillates in the blade frame (the lags, and a
+    # non-oscillating inflow mode that drags the flap, a nearly parallel twin of a lag)
+    missed = resolved & (distance(ref.exponents, got.exponents) > hill.LAG_TOL)
+    off = np.abs(ref.exponents.imag - Omega * np.round(ref.exponents.imag / Omega))
+    assert np.all(off[missed] <= LAG_OSCILLATION * np.abs(ref.exponents.real[missed]))
 
     def without_lags(av, marked, E0, eps, w):
         mask, (lam, X, Y) = tier_of(av, marked, E0, eps, w)
@@ -240,3 +246,43 @@ def test_with_aerodynamic_lags_the_modal_basis_equals_the_whole_pencil(monkeypat
 #: The band of the aerodynamic-lag test [per-rev]: its whole-pencil reference takes 69 s
 #: at 1.5 (229 s at 3)
 BAND = 1.5
+
+
+def test_slow_inflow_lags_that_beat_stay_out_of_the_modal_basis():
+    """The shipped IEA 15-MW at 3 m/s with Oye's inflow and Jones's lags (3 elements of order
+    6): Oye's slow lags of neighbouring elements (decay 0.009-0.044 1/s) couple into nearly
+    degenerate clusters that beat at 0.13-0.28 of their decay rate, with nearly parallel
+    vectors (|cos| 0.999): no modal coordinates.  They are the aerodynamic states' own modes
+    (their inflow 400-600 times their structural motion over R; the structural modes there at
+    most 7.2 times) and analyses/labels.aerodynamic_lags marks them (LAG_OSCILLATION 0.5):
+    Hill's modal basis applies (with 0.1 it was refused as defective and the point searched
+    the whole pencil for minutes).  Reference: the reduction's own defect test (no
+    ReductionFailed) and the labels' test, which must mark every averaged mode below 0.05
+    1/s with such an inflow."""
+    from hawt_core.analyses.labels import _aerodynamic_sizes, aerodynamic_lags
+    from hawt_core.analyses.operating_points import at_operating_point
+    from hawt_core.io.catalog import load_any
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        t = load_any("iea15mw")
+        at, _ = at_operating_point(t, 3.0, discon_schedule(shipped_controller("iea15mw")))
+        model = TurbineModel(at, wind=Wind(3.0), inflow="oye", airfoil="jones")
+        mbc = MultiBladeTransform(model).dae(periodic_dae(model,
+                                                          periodic_steady_state(model)))
+    rows, wts = model.display_rows()
+    fc = mbc.fourier(tol=_fourier_tol(model))
+    lags = aerodynamic_lags(model)
+    seen = []
+
+    def marking(lam, X):
+        marked = lags(lam, X)
+        inflow, _, structure = _aerodynamic_sizes(model, X)
+        slow = (np.abs(lam) < 0.05) & (inflow > 100 * structure)
+        seen.append((int(slow.sum()), bool(np.all(marked[slow]))))
+        return marked
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        lam, *_ = hill._reduced_modes(fc, mbc.n, mbc.omega, 25 * model.rotor_speed,
+                                      rows, wts ** 2, {}, hill.CONVERGED_TOL, marking)
+    assert seen and seen[0][0] >= 6 and seen[0][1], seen
+    assert lam.size >= 10

@@ -58,6 +58,9 @@ CORRECTION_TRUST = 0.25
 STRONG_FIRST_MOVE = 3e-3
 #: Largest modal Hill pencil (2H + 1) r formed (dense); beyond, ReductionFailed.
 MAX_REDUCED_SIZE = 3000
+#: Complex entries of one chunk of the out-of-basis correction's right-hand sides (n x
+#: exponents x harmonic blocks; 64 MB), solved together.
+OUT_OF_BASIS_COLUMNS = 4_000_000
 #: Two modal coordinates whose averaged exponents (Hill copies included) are nearer than
 #: DEGENERATE w: the reduction is not used.
 DEGENERATE = 1e-3
@@ -102,63 +105,95 @@ class _Averaged:
         self.dense = dense
 
 
+class _DenseLU:
+    """A dense LU of a real matrix with SuperLU's ``solve(b, trans)``: the dense path's
+    solves, with many right-hand sides at once (BLAS-3; SuperLU solves one column at a
+    time)."""
+
+    def __init__(self, K: np.ndarray):
+        self.factors = sla.lu_factor(K, overwrite_a=True, check_finite=False)
+
+    def solve(self, b: np.ndarray, trans: str = "N") -> np.ndarray:
+        return sla.lu_solve(self.factors, b, trans=0 if trans == "N" else 1,
+                            check_finite=False)
+
+
 def _averaged_modes(A0, E0, radius: float, stats: dict, cache: dict,
                     force_dense: bool = False) -> _Averaged:
     """The averaged pencil's eigenpairs with |lambda| <= radius (_Averaged): ARPACK
     shift-invert about a small negative shift with one sparse LU, or, once ARPACK would need
-    more than DENSE_SHARE of the spectrum (or ``force_dense``), one dense eigensolution of
-    the shift-inverted operator with both sides (exact partners, also within clusters of
-    nearly equal eigenvalues).  ``cache`` keeps the LU and a dense solution for wider
-    radii."""
+    more than DENSE_SHARE of the spectrum (or ``force_dense``: a system with the blades'
+    aerodynamic states, whose lags fill the radius), one dense eigensolution of the
+    shift-inverted operator with both sides (exact partners, also within clusters of nearly
+    equal eigenvalues).  ``cache`` keeps the LU and a dense solution for wider radii."""
     n = A0.shape[0]
     eps = 1e-9 * radius
-    if "lu" not in cache:
-        sigma = -1e-3 * radius
-        cache["sigma"] = sigma
-        cache["lu"] = spla.splu(sp.csc_matrix(A0 - sigma * E0))
-        stats["factorizations"] = stats.get("factorizations", 0) + 1
-    lu, sigma = cache["lu"], cache["sigma"]
+    sigma = cache.setdefault("sigma", -1e-3 * radius)
 
     def within(lam):
         return (np.abs(lam) <= radius) & (lam.imag >= -eps)
 
-    if "dense" in cache:
-        lam, X, Y = cache["dense"]
-        keep = within(lam)
+    def partners(keep):
+        # the left vectors of the dense solution's eigenvalues ``keep``, each solved once
+        # (a wider radius asks for more): y = (A0 - sigma E0)^-T conj(u)
+        lu, (lam, X, Ud, Y, solved) = cache["lu"], cache["dense"]
+        todo = keep & ~solved
+        if todo.any():
+            Y[:, todo] = _solve(lu, Ud[:, todo], trans="T")
+            solved |= todo
+            stats["solves"] = stats.get("solves", 0) + int(todo.sum())
         return _Averaged(lam[keep], X[:, keep], Y[:, keep], lu, sigma, True)
-    ET = sp.csc_matrix(E0.T)
+
+    if "dense" in cache:
+        return partners(within(cache["dense"][0]))
 
     def count(x):
         stats["solves"] = stats.get("solves", 0) + 1
         return x
 
+    def dense():
+        # the shift-inverted operator M = (A0 - sigma E0)^-1 E0 and one dense eigensolution
+        # with both sides, cheaper than ARPACK once it would need many vectors.  M's columns
+        # outside E0's nonzero ones (d: the algebraic unknowns') are zero, so its nonzero
+        # eigenvalues are those of M[d, d] (IEA 15-MW with Oye and Jones: 1866 of 2138, 1.5x
+        # fewer flops): x = M[:, d] x_d / mu (x_d outside d); a left vector u (u^H M =
+        # mu u^H) is zero outside d and gives y = (A0 - sigma E0)^-T conj(u), one of the
+        # pencil's: exact partners, also within clusters of nearly equal eigenvalues.  A
+        # dense LU: its solves with hundreds of columns are BLAS-3
+        stats["dense"] = stats.get("dense", 0) + 1
+        lu = _DenseLU(sp.csc_matrix(A0 - sigma * E0).toarray())
+        stats["factorizations"] = stats.get("factorizations", 0) + 1
+        Ec = sp.csc_matrix(E0)
+        d = np.flatnonzero(np.asarray(abs(Ec).sum(axis=0)).ravel())
+        Md = lu.solve(Ec[:, d].toarray())
+        stats["solves"] = stats.get("solves", 0) + d.size
+        mu, U, V = sla.eig(Md[d], left=True, right=True, check_finite=False)
+        finite = np.abs(mu) > 1e-14 * np.abs(mu).max()        # mu = 0: infinite lambda
+        lam = sigma + 1.0 / mu[finite]
+        up = lam.imag >= -1e-9 * np.abs(lam).max()
+        lam, mu, V = lam[up], mu[finite][up], V[:, finite][:, up]
+        X = np.zeros((n, lam.size), complex)
+        X[d] = V                                    # M[d, d] x_d = mu x_d
+        rest = np.setdiff1d(np.arange(n), d)
+        X[rest] = (Md[rest] @ V) / mu
+        X /= np.linalg.norm(X, axis=0)
+        Ud = np.zeros((n, lam.size), complex)
+        Ud[d] = U[:, finite][:, up].conj()
+        cache["lu"] = lu
+        cache["dense"] = (lam, X, Ud, np.zeros_like(Ud), np.zeros(lam.size, bool))
+        return partners(within(lam))
+
+    if force_dense:
+        return dense()
+    if "lu" not in cache:
+        cache["lu"] = spla.splu(sp.csc_matrix(A0 - sigma * E0))
+        stats["factorizations"] = stats.get("factorizations", 0) + 1
+    lu = cache["lu"]
+    ET = sp.csc_matrix(E0.T)
     right = spla.LinearOperator((n, n), dtype=float,
                                 matvec=lambda x: count(lu.solve(np.asarray(E0 @ x))))
     left = spla.LinearOperator((n, n), dtype=float,
                                matvec=lambda x: count(lu.solve(np.asarray(ET @ x), trans="T")))
-
-    def dense():
-        # the shift-inverted operator M = (A0 - sigma E0)^-1 E0 as a dense matrix (one LU
-        # solve with n right-hand sides) and one dense eigensolution with both sides,
-        # cheaper than ARPACK once it would need many vectors.  A left vector u of M
-        # (u^H M = mu u^H) gives y = (A0 - sigma E0)^-T conj(u), one of the pencil's: exact
-        # partners, also within clusters of nearly equal eigenvalues
-        stats["dense"] = stats.get("dense", 0) + 1
-        M = lu.solve(sp.csc_matrix(E0).toarray())
-        stats["solves"] = stats.get("solves", 0) + n
-        mu, U, V = sla.eig(M, left=True, right=True, overwrite_a=True, check_finite=False)
-        finite = np.abs(mu) > 1e-14 * np.abs(mu).max()        # mu = 0: infinite lambda
-        lam = sigma + 1.0 / mu[finite]
-        up = lam.imag >= -1e-9 * np.abs(lam).max()
-        lam, X = lam[up], V[:, finite][:, up]
-        Y = _solve(lu, U[:, finite][:, up].conj(), trans="T")
-        stats["solves"] = stats.get("solves", 0) + Y.shape[1]
-        cache["dense"] = (lam, X, Y)
-        keep = within(lam)
-        return _Averaged(lam[keep], X[:, keep], Y[:, keep], lu, sigma, True)
-
-    if force_dense:
-        return dense()
 
     def eigs(op, k):
         k = min(k, n - 2)
@@ -337,13 +372,12 @@ def reduced_converged_modes(mats: dict, n: int, w: float, band: float, obs, wts,
     Raises ReductionFailed when the reduction does not apply."""
     E0, A0 = (sp.csc_matrix(m.real) for m in mats[0])
     cache = {} if cache is None else cache
-    av = _averaged_modes(A0, E0, margin * band, stats, cache)
+    # internal modes need their exact left partners (the dense solution), and hundreds of
+    # them fill the radius (ARPACK would restart until DENSE_SHARE: 2 s on the IEA 15-MW)
+    av = _averaged_modes(A0, E0, margin * band, stats, cache,
+                         force_dense=internal is not None)
     eps_basis = 1e-9 * margin * band
     marked = np.zeros(av.lam.size, bool) if internal is None else internal(av.lam, av.X)
-    if np.any(marked) and not av.dense:
-        # internal modes need their exact left partners: the dense solution
-        av = _averaged_modes(A0, E0, margin * band, stats, cache, force_dense=True)
-        marked = internal(av.lam, av.X)
     mask, tier = _internal_tier(av, marked, E0, eps_basis, w)
     Xr = _real_basis(av.lam[~mask], av.X[:, ~mask], eps_basis)
     Yr = _real_basis(av.lam[~mask], av.Y[:, ~mask], eps_basis)
@@ -386,11 +420,7 @@ def reduced_converged_modes(mats: dict, n: int, w: float, band: float, obs, wts,
     L = 2 * H + 1
     kk = np.arange(-H, H + 1)
     lam, vectors, tails, sizes = [], [], [], []
-    for (e, c, dl) in found:
-        p = (Xm @ c.reshape(L, -1).T).T                 # (L, n) harmonics of the vector
-        q = (Ym @ dl.reshape(L, -1).T).T
-        e, p, size = _out_of_basis(e, p, q, c, dl, hill, mats, lu, sigma, E0, Xm, Ym, w,
-                                   tier)
+    for e, p, size in _out_of_basis(found, hill, mats, lu, sigma, E0, Xm, Ym, w, tier):
         if e.imag < -eps:           # the conjugate solution: p_k -> conj(p_-k)
             e, p = e.conjugate(), p[::-1].conj()
         if any(abs(e - o) <= 1e-9 * w for o in lam) and abs(e.imag) > eps:
@@ -422,67 +452,89 @@ def reduced_converged_modes(mats: dict, n: int, w: float, band: float, obs, wts,
     return lam[order], V[:, :, order], tails[order], H, change, sizes[order]
 
 
-def _out_of_basis(eta, p, q, c, dl, hill: _ModalHill, mats: dict, lu, sigma: float, E0, Xm,
-                  Ym, w: float, tier=None):
-    """(eta, p, size) with the response outside the modal basis in every harmonic block:
-    the residual blocks r_m = sum_k (A_{m-k} - (eta + i k w) E_{m-k}) p_k projected off the
-    basis (Ym^T of it is zero), solved by the Neumann series of the averaged pencil's LU
-    about sigma, added to p; eta gets q^T T(eta) f / q^T E_h p (two-sided Rayleigh) and the
-    reduced pencil's own Rayleigh correction.  ``tier``: (lam, X, Y) of the internal modes
-    left out of the basis (_internal_tier), whose share of the residual is solved by their
-    modal expansion instead of the series.  ``size``: the larger of the two corrections
-    relative to max(|eta|, w): both are second order in the coupling they stand for, so
-    the error left is far smaller while they are small."""
+def _out_of_basis(found, hill: _ModalHill, mats: dict, lu, sigma: float, E0, Xm, Ym,
+                  w: float, tier=None):
+    """[(eta, p, size)] for every exponent (eta, c, dl) of ``found`` (_ModalHill.exponent)
+    with the response outside the modal basis in every harmonic block: the residual blocks
+    r_m = sum_k (A_{m-k} - (eta + i k w) E_{m-k}) p_k of the vector p (L, n) in full
+    coordinates projected off the basis (Ym^T of it is zero), solved by the Neumann series
+    of the averaged pencil's LU about sigma, added to p; eta gets q^T T(eta) f / q^T E_h p
+    (two-sided Rayleigh) and the reduced pencil's own Rayleigh correction.  ``tier``: (lam,
+    X, Y) of the internal modes left out of the basis (_internal_tier), whose share of the
+    residual is solved by their modal expansion instead of the series.  ``size``: the
+    larger of the two corrections relative to max(|eta|, w): both are second order in the
+    coupling they stand for, so the error left is far smaller while they are small.  The
+    exponents go through together, in chunks of OUT_OF_BASIS_COLUMNS columns (one
+    multi-column solve per Neumann term for all of them)."""
     H = hill.H
+    L = 2 * H + 1
     kk = np.arange(-H, H + 1)
-    R = _hill_apply(mats, p, eta, w)                    # the residual blocks r_m, columns
-    B = -(R - E0 @ (Xm @ (Ym.T @ R)))
-    inner = 0.0
-    if tier is not None:
-        # the internal modes' response whole: x_j (y_j^T b) / (lambda_j - s) (they may lie
-        # near s, where the Neumann series about sigma would not converge)
-        lt, Xt, Yt = tier
-        C = Yt.T @ B                                    # (m, L)
-        inner = Xt @ (C / (lt[:, None] - (eta + 1j * kk * w)[None, :]))
-        B = B - E0 @ (Xt @ C)
-    s = eta + 1j * kk * w - sigma                        # (L,)
+    n = Xm.shape[0]
+    step = max(1, OUT_OF_BASIS_COLUMNS // (L * n))
+    out = []
+    for first in range(0, len(found), step):
+        chunk = found[first:first + step]
+        m = len(chunk)
+        eta = np.array([f[0] for f in chunk])
+        C = np.array([f[1] for f in chunk])                # (m, L r) modal coordinates
+        D = np.array([f[2] for f in chunk])
+        # harmonic blocks as columns (n, m, L): mode i's harmonic k in column (i, k)
+        P = (Xm @ C.reshape(m * L, -1).T).reshape(n, m, L)
+        Q = (Ym @ D.reshape(m * L, -1).T).reshape(n, m, L)
+        R = _hill_apply(mats, P, eta, w).reshape(n, m * L)    # the residual blocks
+        B = -(R - E0 @ (Xm @ (Ym.T @ R)))
+        shifts = (eta[:, None] + 1j * kk[None, :] * w).ravel()     # (m L,)
+        inner = 0.0
+        if tier is not None:
+            # the internal modes' response whole: x_j (y_j^T b) / (lambda_j - s) (they may
+            # lie near s, where the Neumann series about sigma would not converge)
+            lt, Xt, Yt = tier
+            Ct = Yt.T @ B                                       # (mt, m L)
+            inner = Xt @ (Ct / (lt[:, None] - shifts[None, :]))
+            B = B - E0 @ (Xt @ Ct)
+        s = shifts - sigma
 
-    def beyond(x):
-        # x without its components along the internal modes: round-off there would grow
-        # by ((s - sigma) / (lambda_j - sigma))^p in the series (Oye's slow lags, 1e-11)
-        return x if tier is None else x - Xt @ (Yt.T @ (E0 @ x))
+        def beyond(x):
+            # x without its components along the internal modes: round-off there would
+            # grow by ((s - sigma) / (lambda_j - sigma))^p in the series (Oye's slow lags,
+            # 1e-11)
+            return x if tier is None else x - Xt @ (Yt.T @ (E0 @ x))
 
-    # the Neumann series of every block at once: one multi-column solve per term
-    term = beyond(_solve(lu, B))
-    total = term.copy()
-    for _ in range(NEUMANN_TERMS - 1):
-        term = beyond(s * _solve(lu, E0 @ term))
-        total += term
-    f = np.ascontiguousarray((total + inner).T)         # (L, n)
-    # q^T T(eta) f over every block that f reaches
-    num = np.sum(q.T * _hill_apply(mats, f, eta, w))
-    Ec = hill.Eh @ c
-    den = dl @ Ec
-    # the reduced pencil's own two-sided Rayleigh correction (the coupling among the far
-    # modal coordinates that the partition neglected)
-    near = dl @ (hill.Ah @ c - eta * Ec) / den
-    scale = max(abs(eta), w)
-    return eta + num / den + near, p + f, max(abs(num / den), abs(near)) / scale
+        # the Neumann series of every block of every exponent: one solve per term
+        term = beyond(_solve(lu, B))
+        total = term.copy()
+        for _ in range(NEUMANN_TERMS - 1):
+            term = beyond(s * _solve(lu, E0 @ term))
+            total += term
+        F = (total + inner).reshape(n, m, L)
+        # q^T T(eta) f over every block that f reaches
+        num = np.einsum("nml,nml->m", Q, _hill_apply(mats, F, eta, w))
+        Ec = hill.Eh @ C.T                                      # (L r, m)
+        den = np.einsum("mj,jm->m", D, Ec)
+        # the reduced pencil's own two-sided Rayleigh correction (the coupling among the far
+        # modal coordinates that the partition neglected)
+        near = np.einsum("mj,jm->m", D, hill.Ah @ C.T - eta * Ec) / den
+        scale = np.maximum(np.abs(eta), w)
+        sizes = np.maximum(np.abs(num / den), np.abs(near)) / scale
+        new = eta + num / den + near
+        out += [(new[i], (P[:, i] + F[:, i]).T, sizes[i]) for i in range(m)]
+    return out
 
 
-def _hill_apply(mats: dict, v: np.ndarray, eta, w: float) -> np.ndarray:
-    """Hill's pencil T(eta) applied to the harmonic blocks ``v`` (L, n), as columns (n, L):
-    column m (of -H..H) is sum_k (A_{m-k} - (eta + i k w) E_{m-k}) v_k, ``mats`` {d: (E_d,
-    A_d)}; one sparse product per coefficient harmonic d."""
-    L = v.shape[0]
+def _hill_apply(mats: dict, v: np.ndarray, eta: np.ndarray, w: float) -> np.ndarray:
+    """Hill's pencil T(eta_i) applied to the harmonic blocks ``v`` (n, m, L) of m vectors,
+    the same shape out: block m of vector i is sum_k (A_{m-k} - (eta_i + i k w) E_{m-k})
+    v_ik, ``mats`` {d: (E_d, A_d)}; one sparse product per coefficient harmonic d."""
+    n, m, L = v.shape
     H = (L - 1) // 2
     kk = np.arange(-H, H + 1)
-    out = np.zeros((v.shape[1], L), complex)
+    out = np.zeros((n, m, L), complex)
     for d, (E, A) in mats.items():                      # k = m - d inside -H..H
         k = kk[(kk + d >= -H) & (kk + d <= H)]
         if k.size:
-            V = v[k + H].T
-            out[:, k + d + H] += A @ V - (E @ V) * (eta + 1j * k * w)
+            V = v[:, :, k + H].reshape(n, -1)
+            shift = (eta[:, None] + 1j * k[None, :] * w).ravel()
+            out[:, :, k + d + H] += (A @ V - (E @ V) * shift).reshape(n, m, k.size)
     return out
 
 
