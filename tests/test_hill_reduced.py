@@ -286,3 +286,36 @@ def test_slow_inflow_lags_that_beat_stay_out_of_the_modal_basis():
                                       rows, wts ** 2, {}, hill.CONVERGED_TOL, marking)
     assert seen and seen[0][0] >= 6 and seen[0][1], seen
     assert lam.size >= 10
+
+
+@pytest.mark.parametrize("coupling", [0.003, 0.03])
+def test_a_nearly_degenerate_pair_is_continued_while_the_coupling_does_not_mix_it(coupling):
+    """Two real averaged exponents 8.3e-4 w apart (two overdamped flap roots of the IEA
+    15-MW at 22 m/s: -1.0203 and -1.0183 1/s, w = 2.364) and a complex pair, coupled by a
+    periodic term of relative size ``coupling`` (harmonics +-1).  Reference: the eigenvalues
+    of the same modal Hill pencil (H = 2) solved whole (scipy.linalg.eigvals).  Weakly
+    coupled (3e-3: the pair mixes by ~3e-5 w against its 8e-4 w gap) each exponent continues
+    its own mode: two distinct exponents, each within 1e-6 w of a whole-pencil eigenvalue
+    (the partition keeps the coordinates farther than w to second order; the other member
+    is 8e-4 w away); coupled ten times more the pair mixes and the continuation is refused
+    (ReductionFailed), as is a pair within DEFECTIVE_SPLIT w whatever the coupling."""
+    import scipy.linalg as sla
+    w = 2.36364
+    mu = np.array([-1.0202978, -1.0183294, -0.3 + 1.1j, -0.3 - 1.1j])
+    rng = np.random.default_rng(7)
+    G = coupling * w * (rng.standard_normal((4, 4)) + 1j * rng.standard_normal((4, 4)))
+    Ar = {0: np.diag(mu), 1: G, -1: G.conj()}
+    Er = {0: np.eye(4, dtype=complex), 1: np.zeros((4, 4)), -1: np.zeros((4, 4))}
+    modal = hr._ModalHill(Ar, Er, mu, 2, w)
+    whole = sla.eigvals(modal.Ah, modal.Eh)
+    if coupling < 0.01:
+        got = [modal.exponent(i, mu[i])[0] for i in (0, 1)]
+        assert abs(got[0] - got[1]) > 5e-4 * w
+        for e in got:
+            assert np.min(np.abs(whole - e)) <= 1e-6 * w, (e, whole)
+    else:
+        with pytest.raises(hr.ReductionFailed, match="mixed by the coupling"):
+            modal.exponent(0, mu[0])
+    twins = hr._ModalHill(Ar, Er, np.array([mu[0], mu[0] + 1e-9, *mu[2:]]), 2, w)
+    with pytest.raises(hr.ReductionFailed, match="ambiguous"):
+        twins.exponent(0, mu[0])

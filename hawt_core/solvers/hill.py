@@ -519,7 +519,11 @@ def _reduced_modes(fc, n: int, w: float, band: float, obs, wts, stats: dict, tol
     mats = coefficient_matrices(fc)
     best = None
     cache: dict = {}            # the averaged pencil's LU (and dense spectrum) for every margin
-    for margin in BASIS_MARGINS:
+    # with the aerodynamic lags the wider basis did not lower the weak modes' estimates (IEA
+    # 15-MW, Oye and Jones, at 14, 15 and 25 m/s: 9.0e-4, 9.2e-4, 1.3e-3 -> 9.0e-4, 9.3e-4,
+    # 1.2e-3) and cost 5-14 s a point: the first basis only
+    margins = BASIS_MARGINS if internal is None else BASIS_MARGINS[:1]
+    for margin in margins:
         try:
             lam, V, tails, H, change, corrections = reduced_converged_modes(
                 mats, n, w, band, obs, wts, stats, tol, MAX_HARMONICS, margin=margin,

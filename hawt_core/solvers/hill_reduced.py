@@ -23,8 +23,8 @@ hill.py refines the few modes whose estimate exceeds the tolerance on the whole 
 Cost: a few sparse solves per mode instead of sparse LUs of the (2H + 1) n Hill pencils
 (NREL 5-MW at 8 m/s, 16 elements: 8.5 s -> 1.0 s).  ReductionFailed (and the whole-pencil
 search, hill.py) where the reduction does not apply: a defective averaged eigenvalue (a free
-yaw's double zero: no modal coordinates), a nearly degenerate cluster (ambiguous
-continuation), a strongly periodic system, two modes continuing into one exponent.
+yaw's double zero: no modal coordinates), a degenerate cluster or a nearly degenerate one
+that the coupling mixes (ambiguous continuation), a strongly periodic system, two modes continuing into one exponent.
 
 Internal lags (the blades' aerodynamic states: hundreds of nearly equal, nearly parallel
 real exponents, which have no modal coordinates) are left out of the basis when the caller
@@ -62,8 +62,11 @@ MAX_REDUCED_SIZE = 3000
 #: exponents x harmonic blocks; 64 MB), solved together.
 OUT_OF_BASIS_COLUMNS = 4_000_000
 #: Two modal coordinates whose averaged exponents (Hill copies included) are nearer than
-#: DEGENERATE w: the reduction is not used.
+#: DEGENERATE w form a nearly degenerate cluster: an exponent continues its mode only while
+#: its vector keeps CLUSTER_DOMINANCE of its cluster's share on that mode's coordinate (and
+#: not at all within DEFECTIVE_SPLIT w, a degenerate pair); else the reduction is not used.
 DEGENERATE = 1e-3
+CLUSTER_DOMINANCE = 0.9
 #: Terms of the Neumann series for the out-of-basis response: the index-3 nilpotent part is
 #: exact after three; the finite modes beyond the basis converge like (band / (1.5 band))^p.
 NEUMANN_TERMS = 5
@@ -321,10 +324,11 @@ class _ModalHill:
             P = np.union1d(P, [target])
         Q = np.setdiff1d(np.arange(self.diag.size), P)
         t = int(np.flatnonzero(P == target)[0])
-        near = np.abs(self.diag[P] - self.diag[target]) <= DEGENERATE * w
-        if near.sum() > 1:
-            # a (nearly) degenerate cluster (four blades on a rigid hub: the cyclic modes at
-            # +-1 per-rev from a blade mode are a base frequency apart): which exponent
+        gap = np.abs(self.diag[P] - self.diag[target])
+        near = gap <= DEGENERATE * w
+        if np.count_nonzero(gap <= DEFECTIVE_SPLIT * w) > 1:
+            # a degenerate cluster (four blades on a rigid hub: the cyclic modes at +-1
+            # per-rev from a blade mode are a base frequency apart): which exponent
             # continues which mode is ambiguous
             raise ReductionFailed("nearly degenerate averaged exponents (Hill copies "
                                   "included): the continuation is ambiguous")
@@ -343,6 +347,15 @@ class _ModalHill:
             eta = lam[best]
             if moved <= 1e-14 * max(abs(eta), w):
                 break
+        if near.sum() > 1:
+            # a nearly degenerate cluster (two overdamped flap roots 8e-4 w apart on the IEA
+            # 15-MW at 22 m/s): the continuation is clear when the exponent's vector stays
+            # mostly on its own mode's coordinate within the cluster
+            z = np.abs(ZR[near, best]) ** 2
+            if abs(ZR[t, best]) ** 2 < CLUSTER_DOMINANCE * z.sum():
+                raise ReductionFailed("nearly degenerate averaged exponents (Hill copies "
+                                      "included) mixed by the coupling: the continuation "
+                                      "is ambiguous")
         d = dA - eta * dE
         c = np.zeros(self.diag.size, complex)
         dl = np.zeros(self.diag.size, complex)
