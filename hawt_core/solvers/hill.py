@@ -61,9 +61,15 @@ TRUNCATIONS = ("tail", "converged")
 #: slowest), 5e-4 let a nearly neutral lag mode's real part stray by 1.3e-5 per-rev (4 % of
 #: it) from the monodromy's; 5e-5 keeps it within 1e-6.
 CONVERGED_TOL = 5e-5
-#: The estimated reduction error accepted for a heavily damped mode (|Re| > w) without a
-#: refinement on the whole pencil (hill._reduced_modes): relative to max(|eta|, w).
+#: The estimated reduction error accepted for a heavily damped mode (|Re| > w, or a damping
+#: ratio |Re| / |eta| above HEAVY_RATIO) without a refinement on the whole pencil
+#: (hill._reduced_modes): relative to max(|eta|, w).
 HEAVY_TOL = 1e-3
+#: ... the damping ratio above which a mode is heavily damped whatever its |Re| (IEA 15-MW
+#: at 11 m/s, frozen wake: an overdamped-like flap root -2.276 + 0.598i, ratio 0.97 at
+#: |Re| = 0.96 w, estimated at 1.1e-4, was refined on the whole pencil at H = 2 and 3 for
+#: 33 s of the point's 44 s: a 2.6e-4 rad/s error on a 2.3 1/s decay)
+HEAVY_RATIO = 0.5
 #: ... and for any mode of a system whose internal lags (the blades' aerodynamic states) the
 #: modal basis left out: the whole Hill pencil of such a system factorizes in minutes (IEA
 #: 15-MW at 11 m/s with Oye's inflow and Jones's lags: 530 s to refine one mode estimated at
@@ -534,11 +540,12 @@ def _reduced_modes(fc, n: int, w: float, band: float, obs, wts, stats: dict, tol
             break                   # the wider basis does not apply: keep the first one's
         estimate = CORRECTION_TRUST * corrections
         # a heavily damped mode (|Re| > w: an aerodynamically damped flap mode, damping
-        # ratio ~0.4 and more) is kept at HEAVY_TOL: refining it on the whole pencil costs a
+        # ratio ~0.4 and more; or a damping ratio above HEAVY_RATIO) is kept at HEAVY_TOL: refining it on the whole pencil costs a
         # factorization of the whole Hill pencil per mode (IEA 15-MW at 8 m/s: 50 s instead
         # of 3.5 s) for digits its damping does not have; its estimate is reported in
         # ``change``
-        allowed = np.where(np.abs(lam.real) > w, max(tol, HEAVY_TOL),
+        heavy = (np.abs(lam.real) > w) | (np.abs(lam.real) > HEAVY_RATIO * np.abs(lam))
+        allowed = np.where(heavy, max(tol, HEAVY_TOL),
                            tol if internal is None else max(tol, LAG_TOL))
         weak = np.flatnonzero(estimate > allowed)
         if best is None or weak.size < best[-1].size:
