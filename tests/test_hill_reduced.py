@@ -192,8 +192,8 @@ def test_with_aerodynamic_lags_the_modal_basis_equals_the_whole_pencil(monkeypat
     within w / 8 that oscillates in the blade frame is found (beyond LAG_OSCILLATION; the
     missing ones are the inflow lags, named "aerodynamic" anyway, and a collective inflow
     mode at -0.091 1/s whose flap is 1/4.5 of its inflow, a nearly parallel twin of a lag
-    -0.0023 1/s away, taken whole with the lags: its cyclic twin is found); dropping the lags' response
-    loses or moves exponents by > LAG_TOL (the term is needed and seen)."""
+    -0.0023 1/s away, taken whole with the lags: its cyclic twin is found); dropping the
+    lags' response loses or moves exponents by > LAG_TOL (the term is needed and seen)."""
     from hawt_core.analyses.labels import LAG_OSCILLATION, aerodynamic_lags
     from hawt_core.analyses.operating_points import at_operating_point
     t = load_paper_mesh("nrel5mw")

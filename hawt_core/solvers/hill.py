@@ -540,10 +540,10 @@ def _reduced_modes(fc, n: int, w: float, band: float, obs, wts, stats: dict, tol
             break                   # the wider basis does not apply: keep the first one's
         estimate = CORRECTION_TRUST * corrections
         # a heavily damped mode (|Re| > w: an aerodynamically damped flap mode, damping
-        # ratio ~0.4 and more; or a damping ratio above HEAVY_RATIO) is kept at HEAVY_TOL: refining it on the whole pencil costs a
-        # factorization of the whole Hill pencil per mode (IEA 15-MW at 8 m/s: 50 s instead
-        # of 3.5 s) for digits its damping does not have; its estimate is reported in
-        # ``change``
+        # ratio ~0.4 and more; or a damping ratio above HEAVY_RATIO) is kept at HEAVY_TOL:
+        # refining it on the whole pencil costs a factorization of the whole Hill pencil
+        # per mode (IEA 15-MW at 8 m/s: 50 s instead of 3.5 s) for digits its damping does
+        # not have; its estimate is reported in ``change``
         heavy = (np.abs(lam.real) > w) | (np.abs(lam.real) > HEAVY_RATIO * np.abs(lam))
         allowed = np.where(heavy, max(tol, HEAVY_TOL),
                            tol if internal is None else max(tol, LAG_TOL))

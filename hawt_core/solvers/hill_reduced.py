@@ -24,7 +24,8 @@ Cost: a few sparse solves per mode instead of sparse LUs of the (2H + 1) n Hill 
 (NREL 5-MW at 8 m/s, 16 elements: 8.5 s -> 1.0 s).  ReductionFailed (and the whole-pencil
 search, hill.py) where the reduction does not apply: a defective averaged eigenvalue (a free
 yaw's double zero: no modal coordinates), a degenerate cluster or a nearly degenerate one
-that the coupling mixes (ambiguous continuation), a strongly periodic system, two modes continuing into one exponent.
+that the coupling mixes (ambiguous continuation), a strongly periodic system, two modes
+continuing into one exponent.
 
 Internal lags (the blades' aerodynamic states: hundreds of nearly equal, nearly parallel
 real exponents, which have no modal coordinates) are left out of the basis when the caller
