@@ -59,6 +59,9 @@ CORRECTION_TRUST = 0.25
 STRONG_FIRST_MOVE = 3e-3
 #: Largest modal Hill pencil (2H + 1) r formed (dense); beyond, ReductionFailed.
 MAX_REDUCED_SIZE = 3000
+#: An eigenvalue within REAL_TOL x the basis radius of the real axis is real (its vector made
+#: real in the basis; Im >= -that is the upper half).
+REAL_TOL = 1e-9
 #: Complex entries of one chunk of the out-of-basis correction's right-hand sides (n x
 #: exponents x harmonic blocks; 64 MB), solved together.
 OUT_OF_BASIS_COLUMNS = 4_000_000
@@ -101,12 +104,11 @@ DENSE_SHARE = 0.2
 class _Averaged:
     """The averaged pencil's eigenpairs with |lambda| <= the basis radius and Im >= 0:
     ``lam`` (m,), right vectors ``X`` (n, m), left vectors ``Y`` (n, m) (each column the
-    partner of X's: the nearest left eigenvalue's, or exact from one dense eigensolution:
-    ``dense``), the real LU of A0 - sigma E0 and ``sigma``."""
+    partner of X's: the nearest left eigenvalue's, or exact from one dense eigensolution),
+    the real LU of A0 - sigma E0 and ``sigma``."""
 
-    def __init__(self, lam, X, Y, lu, sigma: float, dense: bool = False):
+    def __init__(self, lam, X, Y, lu, sigma: float):
         self.lam, self.X, self.Y, self.lu, self.sigma = lam, X, Y, lu, sigma
-        self.dense = dense
 
 
 class _DenseLU:
@@ -131,7 +133,7 @@ def _averaged_modes(A0, E0, radius: float, stats: dict, cache: dict,
     shift-inverted operator with both sides (exact partners, also within clusters of nearly
     equal eigenvalues).  ``cache`` keeps the LU and a dense solution for wider radii."""
     n = A0.shape[0]
-    eps = 1e-9 * radius
+    eps = REAL_TOL * radius
     sigma = cache.setdefault("sigma", -1e-3 * radius)
 
     def within(lam):
@@ -146,7 +148,7 @@ def _averaged_modes(A0, E0, radius: float, stats: dict, cache: dict,
             Y[:, todo] = _solve(lu, Ud[:, todo], trans="T")
             solved |= todo
             stats["solves"] = stats.get("solves", 0) + int(todo.sum())
-        return _Averaged(lam[keep], X[:, keep], Y[:, keep], lu, sigma, True)
+        return _Averaged(lam[keep], X[:, keep], Y[:, keep], lu, sigma)
 
     if "dense" in cache:
         return partners(within(cache["dense"][0]))
@@ -160,8 +162,8 @@ def _averaged_modes(A0, E0, radius: float, stats: dict, cache: dict,
         # with both sides, cheaper than ARPACK once it would need many vectors.  M's columns
         # outside E0's nonzero ones (d: the algebraic unknowns') are zero, so its nonzero
         # eigenvalues are those of M[d, d] (IEA 15-MW with Oye and Jones: 1866 of 2138, 1.5x
-        # fewer flops): x = M[:, d] x_d / mu (x_d outside d); a left vector u (u^H M =
-        # mu u^H) is zero outside d and gives y = (A0 - sigma E0)^-T conj(u), one of the
+        # fewer flops), whose right vector is x's rows d, the others M[rest, d] x_d / mu; a
+        # left vector u (u^H M = mu u^H) is zero outside d and gives y = (A0 - sigma E0)^-T conj(u), one of the
         # pencil's: exact partners, also within clusters of nearly equal eigenvalues.  A
         # dense LU: its solves with hundreds of columns are BLAS-3
         stats["dense"] = stats.get("dense", 0) + 1
@@ -390,7 +392,7 @@ def reduced_converged_modes(mats: dict, n: int, w: float, band: float, obs, wts,
     # them fill the radius (ARPACK would restart until DENSE_SHARE: 2 s on the IEA 15-MW)
     av = _averaged_modes(A0, E0, margin * band, stats, cache,
                          force_dense=internal is not None)
-    eps_basis = 1e-9 * margin * band
+    eps_basis = REAL_TOL * margin * band
     marked = np.zeros(av.lam.size, bool) if internal is None else internal(av.lam, av.X)
     mask, tier = _internal_tier(av, marked, E0, eps_basis, w)
     Xr = _real_basis(av.lam[~mask], av.X[:, ~mask], eps_basis)
