@@ -14,8 +14,10 @@ model's ``ac_chordwise`` = a) a distance a ahead of it along the chord, d = a (0
 sin tau) in B, which adds the moment d x F of the force about the reference line (a HAWC2
 blade's c2 line is the half chord, its aerodynamic centre the quarter chord).  The velocity
 is the reference line's (the section's rotation rate times d is left out: the rotor's spin
-moves d along the span, which carries no load); the spanwise component W1 carries no load
-(independence principle).
+moves d along the span, which carries no load; an unsteady airfoil model reads the
+three-quarter chord's, :meth:`BladeStrips.three_quarter_chord`, and adds Theodorsen's
+added-mass loads, :meth:`BladeStrips.added_mass_loads`); the spanwise component W1 carries no
+load (independence principle).
 
 The beam's section-load unknowns are in components of the root frame b turned by the elastic
 rotation, not of B: :meth:`BladeStrips.to_section` and :meth:`BladeStrips.from_section` apply
@@ -27,6 +29,7 @@ import numpy as np
 
 from ..numerics.rotations import atan2
 from .polars import StationPolars
+from .unsteady import added_mass_loads
 
 __all__ = ["BladeStrips", "inflow_sine"]
 
@@ -54,9 +57,19 @@ class BladeStrips:
         #: the aerodynamic centre from the reference line in B (N, G, 1, 3) [m] (in the
         #: chord plane: d1 = 0), or None
         self.ac_offset = None
+        ahead = np.zeros_like(self.chord)
         if aero.ac_chordwise is not None:
-            a = np.interp(s, aero.stations, aero.ac_chordwise)[:, :, None]
-            self.ac_offset = np.stack([0 * a, a * np.cos(self.tau), a * np.sin(self.tau)], -1)
+            ahead = np.interp(s, aero.stations, aero.ac_chordwise)[:, :, None]
+            self.ac_offset = np.stack([0 * ahead, ahead * np.cos(self.tau),
+                                       ahead * np.sin(self.tau)], -1)
+        #: the chord's normal in B (N, G, 1, 3): B1 x the chord towards the leading edge
+        #: (lift's "up", a nose-up pitch turns the chord towards it)
+        self.normal = np.stack([0 * self.tau, -np.sin(self.tau), np.cos(self.tau)], -1)
+        #: the semi-chord b [m] and Theodorsen's a, the reference line aft of mid-chord in
+        #: semi-chords (the aerodynamic centre is the quarter chord: a = ahead / b - 1/2)
+        #: (N, G, 1)
+        self.semichord = 0.5 * self.chord
+        self.axis = ahead / self.semichord - 0.5
         self.frames = np.ascontiguousarray(np.asarray(frames, float)[:, None, None, :, :])
         self.rho = float(rho)
 
@@ -73,6 +86,26 @@ class BladeStrips:
         ``W`` (N, G, B, 3) [m/s] in section-frame components."""
         W2, W3 = W[..., 1], W[..., 2]
         return atan2(W3, -W2) + self.tau, np.sqrt(W2 * W2 + W3 * W3)
+
+    def three_quarter_chord(self, W, pitch_rate):
+        """The air velocity relative to the three-quarter-chord point (N, G, B, 3) in B, from
+        the reference line's ``W`` and the section's pitch rate [rad/s] (N, G, B) about B1:
+        W + b (1/2 - a) pitch_rate n (the chord-plane part of W - Omega x d; the point lies
+        b (1/2 - a) aft of the reference line)."""
+        return W + (self.semichord * (0.5 - self.axis) * pitch_rate)[..., None] * self.normal
+
+    def added_mass_loads(self, normal_rate, pitch_rate, pitch_acc, speed):
+        """Theodorsen's non-circulatory force and moment per unit length (aero/unsteady.py's
+        added_mass_loads) in section-frame components (N, G, B, 3), lift along the chord's
+        normal, the moment about B1 at the reference line, from the rate of the air's
+        velocity normal to the chord ``normal_rate`` [m/s^2], the pitch rate [rad/s] and
+        acceleration [rad/s^2] and the chord-plane speed [m/s] (N, G, B)."""
+        lift, pitching = added_mass_loads(self.rho, speed, self.semichord, self.axis,
+                                          normal_rate, pitch_rate, pitch_acc)
+        force = lift[..., None] * self.normal
+        moment = np.zeros(force.shape, dtype=force.dtype)
+        moment[..., 0] = pitching
+        return force, moment
 
     def loads(self, W, alpha=None):
         """Force and moment per unit length [N/m, N m/m] (N, G, B, 3) in section-frame

@@ -30,7 +30,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["IndicialLag", "JONES", "QUASI_STEADY", "downwash_34", "thin_airfoil_loads"]
+__all__ = ["IndicialLag", "JONES", "QUASI_STEADY", "added_mass_loads", "downwash_34",
+           "thin_airfoil_loads"]
 
 
 @dataclass(frozen=True)
@@ -85,12 +86,33 @@ def downwash_34(speed, alpha, h_rate, alpha_rate, semichord, a):
     return speed * alpha + h_rate + semichord * (0.5 - a) * alpha_rate
 
 
+def added_mass_loads(rho, speed, semichord, a, normal_rate, alpha_rate, alpha_acc):
+    """Theodorsen's non-circulatory lift [N/m] (up) and moment about the axis at ``a``
+    [N m/m] (nose up) per unit span, written with ``normal_rate`` = h'' + U alpha' [m/s^2]:
+    the rate of change of the air's velocity normal to the chord (upwards) relative to the
+    section as the section sees it, which is what a rotating blade's section frame gives
+    (on a straight wing the two terms are apart):
+
+        L_nc = pi rho b^2 (h'' + U alpha' - b a alpha'')
+        M_nc = pi rho b^2 (b a (h'' + U alpha') - U b alpha' / 2 - b^2 (1/8 + a^2) alpha'')
+
+    (the moment's U alpha' terms, -U b (1/2 - a) alpha' in Theodorsen's form, regrouped)."""
+    b = semichord
+    nc = np.pi * rho * b * b
+    lift = nc * (normal_rate - b * a * alpha_acc)
+    moment = nc * (b * a * normal_rate - 0.5 * speed * b * alpha_rate
+                   - b * b * (0.125 + a * a) * alpha_acc)
+    return lift, moment
+
+
 def thin_airfoil_loads(rho, speed, semichord, a, h_acc, alpha_rate, alpha_acc, w_eff,
                        lift_slope=2.0 * np.pi):
     """Lift [N/m] (up) and moment about the axis at ``a`` [N m/m] (nose up) per unit span
     from Theodorsen's thin-airfoil theory with the circulatory part driven by ``w_eff``;
     ``lift_slope`` [1/rad] replaces thin-airfoil theory's 2 pi in the circulatory part."""
     b = semichord
+    # Theodorsen's form as published (added_mass_loads regroups it for rotating sections;
+    # the wing path keeps this one, so the two check each other: tests/test_rotor_aero_states)
     nc = np.pi * rho * b * b
     circulatory = lift_slope * rho * speed * b * w_eff
     lift = nc * (h_acc + speed * alpha_rate - b * a * alpha_acc) + circulatory

@@ -38,14 +38,28 @@ uniform axial wind it settles on the axisymmetric BEM inductions of the frozen w
 shear, yaw, a tower shadow or a wind history each element's induction follows its own loads
 and its own wind (a per-element BEM; no skewed-wake correction).
 
-Unsteady airfoil (``airfoil="jones"``): the polars are read at an effective angle of attack
-that lags the quasi-steady one alpha with Wagner's indicial response in Jones's two-state
-approximation (aero/unsteady.py), written for angles: per Gauss point
-``s_i' = (b_i w / (c / 2)) (alpha - s_i)``, ``alpha_eff = (1 - A1 - A2) alpha + A1 s1 + A2
-s2`` (w the chord-plane speed, c the chord; s_i = alpha in steady flow), so that a harmonic
-alpha gives Jones's C(k) on the circulatory lift in attached flow (the attached-flow part of
-a Beddoes-Leishman model; the added-mass loads, the pitch-rate downwash and dynamic stall are
-not modelled).  Lift stays normal to the relative velocity.
+Unsteady airfoil (``airfoil="jones"``): Theodorsen's thin-airfoil theory in attached flow on
+each section, the circulatory lift lagged by Wagner's function in Jones's approximation
+(aero/unsteady.py), as HAWCStab2's and OpenFAST's attached-flow models:
+
+* the circulatory input is the angle of attack at the three-quarter chord, alpha_34, of the
+  air velocity relative to that point (W + b (1/2 - a) alpha' n: the section's pitch rate
+  alpha' relative to the rotor's rigid spin, b the semi-chord, a Theodorsen's axis position
+  of the reference line, n the chord's normal; strip.BladeStrips.three_quarter_chord);
+* the polars are read at an effective angle that lags it, per Gauss point
+  ``s_i' = (b_i w / b) (alpha_34 - s_i)``, ``alpha_eff = (1 - A1 - A2) alpha_34 + A1 s1 +
+  A2 s2`` (w the chord-plane speed; s_i = alpha_34 in steady flow): a harmonic alpha_34 gives
+  Jones's C(k) on the circulatory lift; lift stays normal to the relative velocity, at the
+  aerodynamic centre;
+* the non-circulatory (added-mass) lift and moment of Theodorsen (aero/unsteady.py's
+  added_mass_loads: the air's inertia, the pitch damping -pi rho U b^3 (1/2 - a) alpha') from
+  the section's pitch rate and acceleration and the rate of the air's normal velocity as the
+  section frame sees it (RotorAerodynamics._section_motion); they shed no vorticity, so Oye's
+  inductions respond to the circulatory loads alone.
+
+In steady operation the pitch rate and the normal velocity's rate vanish (to the
+discretization: the Gauss points' angular velocity), so the steady state is the quasi-steady
+airfoil's.  Dynamic stall (the separated-flow states) is not modelled: attached flow only.
 
 Skewed wake (``Aerodynamics.skew_factor`` K > 0, AeroDyn's default): in yawed or tilted flow
 the axial induced velocity (frozen or Oye's) is redistributed over the disk by Pitt and Peters'
@@ -71,7 +85,7 @@ from ..aero.strip import BladeStrips, inflow_sine
 from ..aero.unsteady import JONES
 from ..aero.wind import Wind
 from ..model import Turbine
-from ..numerics.rotations import rot_apply
+from ..numerics.rotations import cross, dot, rot_apply
 from .aero_blade import AeroelasticBlade, annulus_mean, distance_from_shaft
 
 __all__ = ["RotorAerodynamics", "INFLOW_MODELS", "AIRFOIL_MODELS", "description"]
@@ -111,10 +125,11 @@ class RotorAerodynamics:
     its beam's), ``state_names`` per Gauss point, state-major (state j of Gauss point g of
     element e at ``(j N + e) G + g``)."""
 
-    #: the rows are affine in the rates with constant coefficients: the loads read no rate
-    #: (no added mass), Oye's rows weigh the rates by tau1, tau2 fixed at construction
-    #: (DBEMT_Mod = 1), Jones's by one (TurbineModel reuses dR/dydot; a model whose time
-    #: constants follow the state must say False)
+    #: the rows are affine in the rates with constant coefficients: the added-mass loads
+    #: read V', Omega' through constant section constants (pi rho b^2 and the chord's
+    #: normal), Oye's rows weigh the rates by tau1, tau2 fixed at construction
+    #: (DBEMT_Mod = 1) and see circulatory loads only, Jones's by one (TurbineModel reuses
+    #: dR/dydot; a model whose time constants follow the state must say False)
     constant_rate_coefficients = True
 
     def __init__(self, turbine: Turbine, wind: Wind, rotor_speed: float, beam,
@@ -235,6 +250,32 @@ class RotorAerodynamics:
         time = np.broadcast_to(np.asarray(t, float)[..., None], s3.shape[:-1])
         return {"vectors": np.stack([s3, tt], axis=-2), "B": B, "P": P, "time": time, **skew}
 
+    def _section_motion(self, sec, spin, s3, wind, induced):
+        """The section's motion relative to the air that Theodorsen's pitch-rate and
+        added-mass terms read, (N, G, K) arrays: the pitch rate [rad/s] and acceleration
+        [rad/s^2] about B1 relative to the rotor's rigid spin (``spin`` [rad/s] (K,) about the
+        shaft axis ``s3``: a coned blade's spin has a part about B1 that pitches no section
+        relative to the air; in steady operation both are zero, so the steady state stays
+        the quasi-steady one, as OpenFAST's), and the rate [m/s^2] of the air's velocity
+        normal to the chord as the section frame sees it (Theodorsen's h'' + U alpha'):
+
+            d(W_B)/dt = -Omega x wind_B + Omega_rel x induced_B - Vdot_B
+
+        the free wind fixed in space (its changes along the section's path in a shear or a
+        gust carry no added-mass load here), the induced velocity fixed in the rotor
+        (``induced`` (N, G, K, 3) in B; its own rate, Oye's, left out: slow), V's component
+        rates those of the beam's unknowns; all in section-frame components."""
+        st = self.strips
+        omega = st.to_section(sec["Omega"])
+        spin = np.asarray(spin)[..., None]
+        rel = omega - spin * s3
+        pitch_rate = rel[..., 0]
+        # d(Omega_1 - spin s3_1)/dt with s3 fixed in the rotor: d(s3_B)/dt = s3_B x Omega_rel
+        pitch_acc = (st.to_section(sec["Omegadot"])[..., 0]
+                     - spin[..., 0] * (s3[..., 1] * rel[..., 2] - s3[..., 2] * rel[..., 1]))
+        rate = cross(rel, induced) - cross(omega, wind) - st.to_section(sec["Vdot"])
+        return pitch_rate, pitch_acc, dot(rate, st.normal)
+
     def loads(self, air, x=None, xd=None, out=None):
         """The beam's ``section_loads`` callback (fem/beam.py) for blades with root data
         ``air`` (root_data, leading dimension the beam batch K): force and moment per length
@@ -283,22 +324,28 @@ class RotorAerodynamics:
                 axial = axial * skewed_wake_factor(skew[..., 0], skew[..., 1], a_now,
                                                    self.radius_ratio,
                                                    self.skew_factor)[..., None]
-            W = wind - axial * s3 - swirl * t - st.to_section(sec["V"])
+            induced = axial * s3 + swirl * t
+            W = wind - induced - st.to_section(sec["V"])
             alpha, w = st.angle_of_attack(W)
-            out["alpha"] = alpha
             rows = []
             alpha_eff = None
             if self.lag is not None:
+                pitch_rate, pitch_acc, normal_rate = self._section_motion(
+                    sec, air["spin"], s3, wind, induced)
+                # the circulatory lift's input: the angle at the three-quarter chord
+                alpha, _ = st.angle_of_attack(st.three_quarter_chord(W, pitch_rate))
                 j0 = 4 if self.inflow == "oye" else 0
                 lag = X[j0:j0 + self.lag.states]
                 alpha_eff = (1.0 - sum(self.lag.A)) * alpha
                 lag_rows = []
                 for i, (Ai, bi) in enumerate(zip(self.lag.A, self.lag.b)):
                     alpha_eff = alpha_eff + Ai * lag[i]
-                    lag_rows.append(Xd[j0 + i] - bi * w / (0.5 * st.chord) * (alpha - lag[i]))
+                    lag_rows.append(Xd[j0 + i] - bi * w / st.semichord * (alpha - lag[i]))
+            out["alpha"] = alpha
             force, moment, _ = st.loads(W, alpha_eff)
             if self.inflow == "oye":
-                # each element's quasi-steady inductions from its own loads, filtered (Oye)
+                # each element's quasi-steady inductions from its own (circulatory: the
+                # added-mass loads shed no vorticity) loads, filtered (Oye)
                 thrust = np.sum(force * s3, axis=-1)
                 drive = np.sum(force * t, axis=-1)
                 sphi = inflow_sine(W, s3, t)
@@ -310,6 +357,8 @@ class RotorAerodynamics:
                 rows += [Wa, Wt, za, zt]            # the unknowns' order: a, a', z_a, z_t
             if self.lag is not None:
                 rows += lag_rows
+                f_nc, m_nc = st.added_mass_loads(normal_rate, pitch_rate, pitch_acc, w)
+                force, moment = force + f_nc, moment + m_nc
             if rows:
                 out["rows"] = np.stack(rows).transpose(3, 0, 1, 2).reshape(
                     rows[0].shape[-1], -1)

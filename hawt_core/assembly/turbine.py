@@ -203,14 +203,14 @@ class TurbineModel:
     def _air(self, q, u, t, tower=None):
         """What the blades' aerodynamic loads need from the rigid coordinates q (..., nq) and
         speeds u (..., nu) at times t (...) and the tower-top state (RotorAerodynamics.root_data:
-        arrays with leading dimensions (..., Nb); with dynamic inflow also ``spin``, the
-        rotor's actual speed, rigid.rotor_spin); None in a vacuum."""
+        arrays with leading dimensions (..., Nb); with dynamic inflow or an unsteady airfoil
+        also ``spin``, the rotor's actual speed, rigid.rotor_spin); None in a vacuum."""
         if self.aero is None:
             return None
         fr = self.rigid.frames(q, t, tower)
         P = self.rigid.root_points(q, t, tower) if self.aero.field else None
         air = self.aero.root_data(fr["B"], fr["S"], P, t)
-        if self.aero.inflow == "oye":
+        if self.aero.inflow == "oye" or self.aero.lag is not None:
             spin = self.rigid.rotor_spin(q, u, t, tower)
             air["spin"] = np.broadcast_to(np.asarray(spin)[..., None],
                                           fr["B"].shape[:-2]).copy()
