@@ -41,7 +41,7 @@ def test_hill_and_monodromy_agree_in_wind():
     t = teetering_rotor(stiffness=1.0, gravity=True, tilt=0.1)
     res = {m: modal_analysis(t, elements=2, wind=Wind(7.0), method=m, max_per_rev=8.0)
            for m in ("radau", "hill")}
-    key = lambda m: (m.family, m.symmetry, m.index)            # noqa: E731
+    key = lambda m: (m.family, m.symmetry, m.index, m.duplicate)            # noqa: E731
     radau = {key(m): m for m in res["radau"].modes if m.frequency_per_rev < 7.0}
     hill = {key(m): m for m in res["hill"].modes}
     assert len(radau) >= 6
@@ -49,7 +49,7 @@ def test_hill_and_monodromy_agree_in_wind():
         h = hill[k]
         assert abs(m.frequency_per_rev - h.frequency_per_rev) < 1e-6, k
         assert abs(m.real_per_rev - h.real_per_rev) < 1e-6, k
-    teeter = radau[("teeter", None, 1)]
+    teeter = radau[("teeter", None, 1, None)]
     assert teeter.damping_ratio > 0.05
     s = res["radau"].settings
     assert s["wind_speed"] == 7.0 and not s["in_vacuum"] and "frozen wake" in s["aerodynamics"]
@@ -66,7 +66,7 @@ def test_hill_and_monodromy_agree_in_wind_for_one_and_four_blades(blades):
     t = replace(t, rotor=replace(t.rotor, blades=blades), hub=replace(t.hub, teeter=False))
     res = {m: modal_analysis(t, elements=2, wind=Wind(7.0), method=m, max_per_rev=6.0)
            for m in ("radau", "hill")}
-    key = lambda m: (m.family, m.symmetry, m.index)            # noqa: E731
+    key = lambda m: (m.family, m.symmetry, m.index, m.duplicate)            # noqa: E731
     radau = {key(m): m for m in res["radau"].modes if m.frequency_per_rev < 5.0}
     hill = {key(m): m for m in res["hill"].modes}
     assert len(radau) >= (3 if blades == 1 else 8)
@@ -180,7 +180,8 @@ def test_turbine_flutter_sweep_finds_the_damping_crossing(tmp_path, capsys):
     f = tmp_path / "soft.yaml"
     f.write_text(dump_turbine(soft))
     assert cli.main(["flutter", str(f), "--wind", "6", "--rpm", "28.6479:66.8451:5",
-                     "--pitch", "0", "-n", "2", "--json"]) == 0
+                     "--pitch", "0", "-n", "2", "--inflow", "frozen", "--airfoil",
+                     "quasi-steady", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["flutter_rotor_speed"] == pytest.approx(r.flutter_speed, rel=1e-3)
     assert cli.main(["flutter", str(f), "-n", "2"]) != 0

@@ -334,7 +334,8 @@ def test_commands_take_the_aerodynamic_model_and_refuse_it_without_wind(tmp_path
     """``hawt simulate FILE --wind U --inflow oye --airfoil jones``: a short simulation with
     the states runs and reports finite values; ``--inflow`` and ``--airfoil`` without
     ``--wind`` (modes, campbell, simulate, a wing's flutter) fail naming the flag, and a
-    model name outside the choices is refused by the parser."""
+    model name outside the choices is refused by the parser; ``modes --wind`` runs Oye +
+    Jones unless told otherwise (the table's header says which)."""
     import json
     from hawt_core import cli
     from hawt_core.io import dump_turbine
@@ -355,6 +356,15 @@ def test_commands_take_the_aerodynamic_model_and_refuse_it_without_wind(tmp_path
                 or "--airfoil: only used with --wind" in err), err
     assert cli.main(["modes", str(f), "--wind", "6", "--inflow", "pitt-peters"]) != 0
     assert "--inflow: invalid choice: 'pitt-peters'" in capsys.readouterr().err
+    # the stability analyses' default in wind is HAWCStab2's kind (Oye + Jones); the frozen
+    # wake with quasi-steady airfoils (OpenFAST's linearization) when asked
+    point = ["modes", str(f), "--wind", "6", "--rotor-speed", "5", "-n", "2"]
+    for extra, words in (([], ("Oye dynamic inflow", "Jones two-state")),
+                         (["--inflow", "frozen", "--airfoil", "quasi-steady"],
+                          ("frozen wake", "quasi-steady airfoils"))):
+        assert cli.main(point + extra) == 0
+        header = capsys.readouterr().out.splitlines()[0]
+        assert all(w in header for w in words), header
 
 
 def test_dynamic_inflow_follows_the_actual_rotor_speed():

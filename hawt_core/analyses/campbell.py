@@ -233,7 +233,7 @@ def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
     def new_track(m, v):
         t = {"label": m["label"], "family": m["family"], "symmetry": m["symmetry"],
              "index": m["index"], "vals": np.full((S, _COLS), np.nan), "vec": v, "off": 0,
-             "f": m["frequency_hz"], "whirl": m.get("whirl")}
+             "f": m["frequency_hz"], "whirl": m.get("whirl"), "names": [None] * S}
         tracks.append(t)
         return t
 
@@ -242,6 +242,7 @@ def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
         # harmonic re-indexing found by the MAC, accumulated from the track's first point)
         ff = m.get("fixed_frame_per_rev")
         fz = m.get("fixed_frame_damping_ratio")
+        t["names"][i] = (m["label"], m["family"], m["symmetry"], m["index"], m.get("whirl"))
         t["vals"][i] = (m["frequency_per_rev"], m["frequency_hz"], m["real_per_rev"],
                         m["damping_ratio"], mac, off, np.nan if ff is None else ff,
                         np.nan if fz is None else fz)
@@ -318,6 +319,9 @@ def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
             if j not in taken:
                 put(new_track(m, V[..., j]), i, m, V[..., j], float("nan"), 0, w)
     tracks = _merge_fragments(tracks, speeds, step, x)
+    if in_wind:
+        for t in tracks:
+            _majority_name(t)
     # unique labels (a label reused by a track born later gets a suffix)
     seen = {}
     out = []
@@ -349,7 +353,8 @@ def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
                          fixed_frame_hz=v[:, 6] * rev_hz if fixed else None,
                          fixed_frame_damping_ratio=v[:, 7] if fixed else None,
                          fixed_continuous_hz=(v[:, 6] + sh6) * rev_hz if fixed else None,
-                         whirl=t.get("whirl"), fixed_shift=shift6))
+                         whirl=t.get("whirl"), fixed_shift=shift6,
+                         names=[n[0] if n else None for n in t["names"]]))
     _mark_twins(out, speeds)
     return out
 
@@ -358,6 +363,22 @@ def _track_hz(t: dict, speeds: np.ndarray) -> np.ndarray:
     """A working track's continuous frequency [Hz] (NaN where absent)."""
     v = t["vals"]
     return (v[:, 0] + np.nan_to_num(v[:, 5])) * speeds / (2 * np.pi)
+
+
+def _majority_name(track: dict) -> None:
+    """Name a track in wind after the name its points carry most often (ties: the first of
+    them along the sweep), not after its first point: a heavily damped flap mode's shape
+    mixes the first two vacuum flap modes, and the one it starts with need not be the one it
+    keeps."""
+    names = [n for n in track["names"] if n is not None]
+    if not names:
+        return
+    count: dict = {}
+    for n in names:
+        count[n[0]] = count.get(n[0], 0) + 1
+    best = max(count.values())
+    label, family, symmetry, index, whirl = next(n for n in names if count[n[0]] == best)
+    track.update(label=label, family=family, symmetry=symmetry, index=index, whirl=whirl)
 
 
 def _merge_fragments(tracks: list, speeds: np.ndarray, step: int, x=None) -> list:
@@ -402,6 +423,7 @@ def _merge_fragments(tracks: list, speeds: np.ndarray, step: int, x=None) -> lis
             continue
         _, cand, k = best
         for i in idx:
+            cand["names"][i] = frag["names"][i]
             cand["vals"][i] = frag["vals"][i]
             cand["vals"][i, 4] = np.nan
             cand["vals"][i, 5] = np.nan_to_num(frag["vals"][i, 5]) + k

@@ -16,10 +16,14 @@ from ..assembly import TurbineModel
 from ..assembly.turbine import DRIVETRAIN_COORDINATES
 from ..fem.energy import FAMILIES, classify_energy
 from ..results.modes import Mode
+from .blade_reference import blade_motion
 from ..solvers.floquet import dominant_harmonic
 from ..solvers.multiblade import fixed_frame_modes
 
-__all__ = ['label_modes', 'separate_degenerate_modes', 'add_fixed_frame', 'family_exponent', 'exponent_fields', 'number_modes', 'mark_overdamped', 'aerodynamic_lags', 'OVERDAMPED_ZETA', 'FAMILY_ROWS', 'TOWER_DIRECTIONS']
+__all__ = ['label_modes', 'separate_degenerate_modes', 'add_fixed_frame', 'family_exponent',
+           'exponent_fields', 'number_modes', 'mark_overdamped', 'name_after_vacuum',
+           'aerodynamic_lags', 'OVERDAMPED_ZETA', 'VACUUM_NEXT', 'FAMILY_ROWS',
+           'TOWER_DIRECTIONS']
 
 
 #: ``symmetry`` of a tower mode: the dominant tower-top motion
@@ -40,8 +44,10 @@ def _tower_motion(model: TurbineModel, x):
     return float(parts[j]), TOWER_DIRECTIONS[j]
 
 
-def label_modes(model: TurbineModel, fl, columns) -> list:
-    """Modes (unsorted indices) labelled from their Floquet eigenvectors x(0)."""
+def label_modes(model: TurbineModel, fl, columns, reference=None) -> list:
+    """Modes (unsorted indices) labelled from their Floquet eigenvectors x(0); with a
+    ``reference`` (blade_reference.BladeReference: the vacuum blade modes, in wind) a blade
+    mode takes the family and index of the vacuum mode its blades move most like."""
     lay = model.layout
     R = model.turbine.hub.radius + model.turbine.blade.length
     sec = model.turbine.blade.sections
@@ -109,6 +115,13 @@ def label_modes(model: TurbineModel, fl, columns) -> list:
             family, symmetry, phase = rig_name, None, None
         else:
             family = FAMILIES[int(np.argmax(energy))]
+        shares = None
+        if rig_name is None and reference is not None:
+            shares = reference.shares(blade_motion(model, reference, x))
+            if shares.max() > 0:
+                family = reference.families[int(np.argmax(shares))]
+            else:
+                shares = None
         eta = family_exponent(model, fl, i, family)
         if rig_name is None:
             symmetry, phase = _blade_symmetry(model, fl, i, eta)
@@ -122,7 +135,52 @@ def label_modes(model: TurbineModel, fl, columns) -> list:
                                              ("axial", "shear2", "shear3", "torsion", "flap", "lag"),
                                              energy)}},
                           column=int(i)))
+        if shares is not None:
+            _name_after(modes[-1], reference, int(np.argmax(shares)), shares)
     return modes
+
+
+def _name_after(m: Mode, reference, j: int, shares) -> None:
+    """Name the mode ``m`` after the vacuum blade mode ``j`` of ``reference``."""
+    m.family = m.vacuum_family = reference.families[j]
+    m.vacuum_index = reference.indices[j]
+    m.vacuum_share = float(shares[j])
+    m.vacuum_shares = shares
+
+
+#: A blade mode in wind whose most alike vacuum mode names another mode of the same symmetry
+#: already (one more like it) takes its next match if that holds at least this fraction of
+#: its best share (a cyclic 1st torsion mode of a large blade moves as much like the 3rd flap
+#: near it, whose own cyclic modes are named after it); else both keep the name (a second
+#: mode of one name: an aerodynamic state's mode that drags the blades along).
+VACUUM_NEXT = 0.5
+
+
+def name_after_vacuum(modes, reference) -> list:
+    """One name per vacuum mode and symmetry where the shapes allow: within each symmetry
+    (collective, each whirl, symmetric, ...), the oscillatory blade modes in the order of
+    their best share take their most alike vacuum mode still free (VACUUM_NEXT); overdamped
+    roots keep theirs (a pair's two roots share one name).  Returns the modes whose family
+    changed (their exponent and fixed-frame fields are the caller's to update)."""
+    groups: dict = {}
+    for m in modes:
+        if m.vacuum_shares is not None and not m.overdamped:
+            groups.setdefault(m.symmetry, []).append(m)
+    changed = []
+    for group in groups.values():
+        named: dict = {}                 # vacuum mode -> modes named after it so far
+        for m in sorted(group, key=lambda m: -float(m.vacuum_shares.max())):
+            s = m.vacuum_shares
+            order = np.argsort(-s)
+            j = next((int(k) for k in order if k not in named
+                      and s[k] >= VACUUM_NEXT * s[order[0]]), int(order[0]))
+            named[j] = named.get(j, 0) + 1
+            m.duplicate = named[j] if named[j] > 1 else None
+            before = m.family
+            _name_after(m, reference, j, s)
+            if m.family != before:
+                changed.append(m)
+    return changed
 
 
 #: A mode is one of the blades' inflow states when its largest induction state exceeds this
@@ -484,6 +542,10 @@ def number_modes(modes):
         if sym and sym.startswith("cyclic") and len(members) == 2:
             k = sym[len("cyclic"):]
             keys += [(fam, f"backward-whirl{k}"), (fam, f"forward-whirl{k}")]
+        if all(m.vacuum_index is not None for m in members):
+            for m in members:           # named after its vacuum blade mode
+                m.index = m.vacuum_index
+            continue
         index = max(counts.get(key, 0) for key in keys) + 1
         for key in keys:
             counts[key] = index

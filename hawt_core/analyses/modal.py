@@ -47,8 +47,10 @@ from ..solvers.hill import hill_modes
 from ..solvers.multiblade import MultiBladeTransform
 from ..solvers.periodic import PeriodicSteadyState, periodic_steady_state
 from ..solvers.steady import constant_steady_state
+from .blade_reference import vacuum_blade_reference
 from .labels import (add_fixed_frame, aerodynamic_lags, exponent_fields, family_exponent,
-                     label_modes, mark_overdamped, number_modes, separate_degenerate_modes)
+                     label_modes, mark_overdamped, name_after_vacuum, number_modes,
+                     separate_degenerate_modes)
 
 __all__ = ["modal_analysis", "periodic_dae", "validate_request", "Cancelled", "METHODS",
            "DEFAULT_STEPS", "DEFAULT_MAX_PER_REV", "STEPS_PER_CYCLE", "MIN_STEPS", "MAX_STEPS",
@@ -227,10 +229,10 @@ def _fourier_tol(model: TurbineModel) -> float:
 
 
 def _monodromy_modes(model: TurbineModel, dae: LinearPeriodicDAE, method: str, steps: int,
-                     use_fast: bool, rows, wts, d: int):
+                     use_fast: bool, rows, wts, d: int, reference=None):
     """Floquet by time marching (Radau IIA or the paper's central differencing): the
-    FloquetResult, the labelled resolved modes, the count of unresolved ones and the
-    resolution limit [per-rev]."""
+    FloquetResult, the labelled resolved modes (named after the vacuum blade ``reference``'s
+    modes, label_modes), the count of unresolved ones and the resolution limit [per-rev]."""
     # samples of the periodic eigenvectors per period: the dominant harmonic is resolved up
     # to samples / 2 per-rev, so the reported band is also capped at samples / 2.5
     samples = int(min(MAX_SAMPLES, max(128, 2 ** np.ceil(np.log2(2.5 * steps / STEPS_PER_CYCLE[method])))))
@@ -276,7 +278,7 @@ def _monodromy_modes(model: TurbineModel, dae: LinearPeriodicDAE, method: str, s
         unresolved += len(resolved) - len(pairs)
         # labels from the Radau eigenvectors: with central differencing the unresolved mesh
         # modes alias onto the unit circle and mix into nearly equal multipliers' eigenvectors
-        modes = label_modes(model, ref, [b for _, b in pairs])
+        modes = label_modes(model, ref, [b for _, b in pairs], reference)
         for m, (a, _) in zip(modes, pairs):
             for name, value in exponent_fields(family_exponent(model, fl, a, m.family),
                                                 fl.omega).items():
@@ -284,7 +286,7 @@ def _monodromy_modes(model: TurbineModel, dae: LinearPeriodicDAE, method: str, s
             m.column = int(a)
     else:
         separate_degenerate_modes(model, fl, resolved)
-        modes = label_modes(model, fl, resolved)
+        modes = label_modes(model, fl, resolved, reference)
     return fl, modes, unresolved, limit
 
 
@@ -418,6 +420,8 @@ def _modal_analysis(turbine, elements, rotor_speed, steps, method, fast, harmoni
         steady = periodic_steady_state(model, harmonics=harmonics)
     timings["steady_state"] = time.perf_counter() - t0
     stage(0.2, "linearization")
+    # in wind the blade modes are named after the vacuum blade's (analyses/blade_reference.py)
+    reference = vacuum_blade_reference(model) if wind is not None else None
     if not standstill:
         dae = periodic_dae(model, steady)
     # a standing rotor is time-invariant as it is: its rotating frame is the fixed frame
@@ -436,7 +440,7 @@ def _modal_analysis(turbine, elements, rotor_speed, steps, method, fast, harmoni
         steps = int(steps) if steps is not None else DEFAULT_STEPS[method]
         stage(0.3, f"monodromy ({method}, {steps} steps)")
         fl, modes, unresolved, limit = _monodromy_modes(model, dae, method, steps, use_fast,
-                                                        rows, wts, d)
+                                                        rows, wts, d, reference)
     else:
         limit = (float(max_per_rev) if max_per_rev is not None
                  else STANDSTILL_MAX_HZ if standstill else DEFAULT_MAX_PER_REV)
@@ -446,7 +450,7 @@ def _modal_analysis(turbine, elements, rotor_speed, steps, method, fast, harmoni
                                transform if mbc is not None else None, limit, rows, wts, d)
         use_fast, steps = False, None
         separate_degenerate_modes(model, fl, fl.modes())
-        modes = label_modes(model, fl, fl.modes())
+        modes = label_modes(model, fl, fl.modes(), reference)
         unresolved = max(0, d - int(fl.exponents.size))     # above the band
         extra = {"frame": frame, "hill_harmonics": hm.harmonics,
                  "hill_size": hm.size, "coefficient_harmonics": hm.coefficient_harmonics}
@@ -462,6 +466,13 @@ def _modal_analysis(turbine, elements, rotor_speed, steps, method, fast, harmoni
     else:
         modes.sort(key=lambda m: (m.frequency_per_rev, m.real_per_rev))
     mark_overdamped(modes)
+    for m in (name_after_vacuum(modes, reference) if reference is not None else []):
+        # a new family: its own motion's dominant harmonic and whirl
+        for name, value in exponent_fields(family_exponent(model, fl, m.column, m.family),
+                                            fl.omega).items():
+            setattr(m, name, value)
+        if transform is not None:
+            add_fixed_frame(model, transform, fl, [m], rows, wts)
     number_modes(modes)
     settings = {"turbine": turbine.name, "elements": model.beam.elements,
                 "order": model.beam.order, "rotor_speed": omega,

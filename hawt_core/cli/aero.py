@@ -197,7 +197,7 @@ def _flutter_args(p):
                    help="turbine: controller file whose schedule gives the pitch at --wind")
     p.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
                    help="turbine: run the speeds on this Dask scheduler's workers")
-    aero_model_args(p)
+    aero_model_args(p, stability=True)
     p.set_defaults(wind_direction=0.0, rotor_speed=None)
     p.add_argument("--speeds", type=grid_type("--speeds", 1e-3, 1e4, "m/s"),
                    default="20:200:19", metavar="START:STOP:COUNT",
@@ -300,26 +300,43 @@ def turbine_in_wind(args, turbine):
                            "pitch_deg": math.degrees(pitch), "source": source}
 
 
-def aero_model_args(p):
+#: The blades' aerodynamic model of the stability analyses (modes, campbell, flutter) in wind
+#: unless --inflow/--airfoil say otherwise: HAWCStab2's kind, dynamic inflow and an unsteady
+#: (attached-flow) airfoil; the frozen-wake quasi-steady model is OpenFAST's linearization's
+#: (MBC3 comparisons) and the other commands' default.
+STABILITY_AERODYNAMICS = ("oye", "jones")
+
+
+def aero_model_args(p, stability: bool = False):
     """``--inflow`` and ``--airfoil``: the blades' aerodynamic model in wind
-    (assembly/rotor_aero.py)."""
+    (assembly/rotor_aero.py); ``stability``: the command is a stability analysis, whose
+    default is STABILITY_AERODYNAMICS."""
     from ..assembly.rotor_aero import AIRFOIL_MODELS, INFLOW_MODELS
+    inflow, airfoil = STABILITY_AERODYNAMICS if stability else ("frozen", "quasi-steady")
+    p.set_defaults(stability=stability)
     p.add_argument("--inflow", choices=INFLOW_MODELS, default=None,
-                   help="with --wind: the inductions frozen at the operating point's BEM "
-                        "state (default), or Oye's dynamic inflow (four states per blade "
-                        "element: the induction lags the loads; the default of simulate "
-                        "with a controller in the loop, where pitch and rotor speed move)")
-    p.add_argument("--airfoil", choices=AIRFOIL_MODELS, default="quasi-steady",
-                   help="with --wind: polars at the quasi-steady angle of attack (default), "
-                        "or Jones's two-state lag of the circulatory lift (attached flow)")
+                   help=f"with --wind: the inductions frozen at the operating point's BEM "
+                        f"state, or Oye's dynamic inflow (four states per blade element: the "
+                        f"induction lags the loads) (default {inflow}" + (
+                            "; frozen is OpenFAST's linearization's, for MBC3 comparisons)"
+                            if stability else "; with a controller in the loop oye)"))
+    p.add_argument("--airfoil", choices=AIRFOIL_MODELS, default=None,
+                   help=f"with --wind: polars at the quasi-steady angle of attack, or "
+                        f"Theodorsen's attached-flow airfoil with Jones's two-state lag of the "
+                        f"circulatory lift, the three-quarter-chord downwash and the "
+                        f"added-mass loads (default {airfoil})")
 
 
 def check_aero_model_args(args):
-    """--inflow/--airfoil other than the defaults need --wind.  An absent --inflow becomes
-    "frozen" (``args.inflow_given`` says whether it was given)."""
+    """--inflow/--airfoil other than the defaults need --wind.  An absent one becomes the
+    command's default (STABILITY_AERODYNAMICS in wind for a stability analysis, else frozen
+    and quasi-steady); ``args.inflow_given`` says whether --inflow was given."""
     args.inflow_given = getattr(args, "inflow", None) is not None
-    if hasattr(args, "inflow") and args.inflow is None:
-        args.inflow = "frozen"
+    stable = getattr(args, "stability", False) and args.wind is not None
+    for key, default, fallback in (("inflow", STABILITY_AERODYNAMICS[0], "frozen"),
+                                   ("airfoil", STABILITY_AERODYNAMICS[1], "quasi-steady")):
+        if hasattr(args, key) and getattr(args, key) is None:
+            setattr(args, key, default if stable else fallback)
     if args.wind is None:
         for flag, v in (("--inflow", getattr(args, "inflow", "frozen") != "frozen"),
                         ("--airfoil", getattr(args, "airfoil", "quasi-steady")
@@ -328,12 +345,12 @@ def check_aero_model_args(args):
                 raise ValueError(f"{flag}: only used with --wind")
 
 
-def wind_args(p):
-    """``--wind U`` and what goes with it (modes, campbell at one wind speed)."""
+def wind_args(p, stability: bool = False):
+    """``--wind U`` and what goes with it (modes, simulate at one wind speed; ``stability``:
+    aero_model_args's)."""
     p.add_argument("--wind", type=finite_float("--wind", unit="m/s"), default=None,
                    metavar="U", help="analyse in a steady wind of U m/s (at hub height): "
-                   "blade-element momentum loads (wake frozen at the operating point unless "
-                   "--inflow oye) "
+                   "blade-element momentum loads (the model: --inflow, --airfoil) "
                    "(rotor speed and pitch from --rotor-speed/--pitch, else the controller's "
                    "schedule, else the turbine file)")
     p.add_argument("--wind-direction", type=finite_float("--wind-direction", unit="deg"),
@@ -351,7 +368,7 @@ def wind_args(p):
                         "wheel's); simulate: also runs that controller in the loop (a file or "
                         "'rosco'; 'builtin': hawt's baseline controller on that schedule; "
                         "'none': the rotor at the schedule's speed)")
-    aero_model_args(p)
+    aero_model_args(p, stability)
 
 
 def check_wind_args(args):

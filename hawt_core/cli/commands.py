@@ -104,7 +104,7 @@ def _modes_args(p):
     from .aero import wind_args
     model_args(p)
     marching_args(p)
-    wind_args(p)
+    wind_args(p, stability=True)
     p.add_argument("--max-per-rev", type=per_rev, default=None, metavar="F",
                    help="band of Hill's method and multi-blade coordinates: modes below F "
                         "per-rev (default 50); with --rotor-speed 0 (a standing rotor) F is "
@@ -192,7 +192,7 @@ def _campbell_args(p):
     p.add_argument("--wind-direction", type=finite_float("--wind-direction", unit="deg"),
                    default=0.0, metavar="DEG", help="with --wind: yaw misalignment [deg]")
     from .aero import aero_model_args
-    aero_model_args(p)
+    aero_model_args(p, stability=True)
     elements_arg(p)
     marching_args(p)
     p.add_argument("--workers", type=positive_int, default=None, metavar="W",

@@ -16,7 +16,7 @@ __all__ = ['CSV_COLUMNS', 'FRAMES', 'Track', 'CampbellResult']
 CSV_COLUMNS = ("speed_rad_s", "speed_rpm", "track", "family", "symmetry", "index",
                "frequency_per_rev", "frequency_hz", "real_per_rev", "damping_ratio", "mac",
                "harmonic_shift", "continuous_hz", "fixed_frame_per_rev", "fixed_frame_hz",
-               "fixed_frame_damping_ratio", "whirl", "frame")
+               "fixed_frame_damping_ratio", "whirl", "frame", "point_label")
 
 
 FRAMES = ("fixed", "rotating")
@@ -57,6 +57,9 @@ class Track:
     #: the whole per-rev added to the fixed-frame frequency for its continuous curve (the
     #: fixed frame is unwrapped on its own values); None: ``shift``
     fixed_shift: Optional[np.ndarray] = field(default=None, repr=False)
+    #: the name each point gives its own mode (mode_label; None where the track is absent):
+    #: where it differs from ``label`` the mode changes character along the sweep
+    names: Optional[list] = field(default=None, repr=False)
 
     def frame_shift(self, frame: str = "rotating") -> np.ndarray:
         """The per-rev shifts of the continuous curve in ``frame`` (circled in the plot)."""
@@ -142,7 +145,8 @@ class CampbellResult:
                             "fixed_frame_hz": float(t.fixed_continuous_hz[i]) if fixed else nan,
                             "fixed_frame_damping_ratio":
                                 float(t.fixed_frame_damping_ratio[i]) if fixed else nan,
-                            "whirl": t.whirl or "", "frame": self.frame})
+                            "whirl": t.whirl or "", "frame": self.frame,
+                            "point_label": (t.names[i] or "") if t.names else ""})
                 if self.wind_speeds is not None:
                     out[-1]["wind_speed_m_s"] = float(self.wind_speeds[i])
                     out[-1]["pitch_deg"] = float(self.settings["pitch_deg"][i])

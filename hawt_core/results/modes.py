@@ -65,6 +65,27 @@ class Mode:
     #: critical): "slow" or "fast" for the two real roots of a pair that share its index,
     #: "root" for one without its partner in the band; None for an oscillatory mode
     overdamped: Optional[str] = None
+    #: in wind, a blade mode's structural origin: the vacuum mode of one blade on the hub
+    #: spinning at the same speed whose shape its blades take most (analyses/blade_reference.py)
+    #: that names it (family and index), and that share of the blades' motion (0 to 1);
+    #: None in a vacuum and for the tower's, the rigid bodies' and the inflow's modes
+    vacuum_family: Optional[str] = None
+    vacuum_index: Optional[int] = None
+    vacuum_share: Optional[float] = None
+    #: k >= 2 for the k-th mode of one name (in wind: a mode whose blades move most like a
+    #: vacuum mode that names a mode more like it already, analyses/labels.py
+    #: name_after_vacuum); None for the first
+    duplicate: Optional[int] = None
+    #: the shares along every vacuum blade mode (the reference's order), for the naming
+    vacuum_shares: Optional[np.ndarray] = field(default=None, repr=False, compare=False)
+
+    @property
+    def vacuum_mode(self) -> Optional[str]:
+        """e.g. '1st torsion' (the vacuum blade mode that names this one), or None."""
+        from .tables import ordinal
+        if self.vacuum_family is None:
+            return None
+        return f"{ordinal(self.vacuum_index)} {self.vacuum_family}"
 
     @property
     def label(self) -> str:
@@ -80,7 +101,9 @@ class Mode:
                 "fixed_frame_hz": self.fixed_frame_hz,
                 "fixed_frame_damping_ratio": self.fixed_frame_damping_ratio,
                 "whirl": self.whirl, "cyclic_order": self.cyclic_order,
-                "frequency_error": self.frequency_error, "overdamped": self.overdamped}
+                "frequency_error": self.frequency_error, "overdamped": self.overdamped,
+                "vacuum_mode": self.vacuum_mode, "vacuum_share": self.vacuum_share,
+                "duplicate": self.duplicate}
 
 
 @dataclass

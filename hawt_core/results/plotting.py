@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .tables import ordinal, overdamped_text
+from .tables import duplicate_text, ordinal, overdamped_text
 
 
 def _pyplot():
@@ -80,7 +80,8 @@ def mode_label(mode) -> str:
         text = mode.family if mode.index == 1 else f"{mode.family} {mode.index}"
     else:
         text = f"{ordinal(mode.index)} {mode.symmetry} {mode.family}"
-    return text + overdamped_text(mode)     # "1st collective flap (overdamped, slow)"
+    # "1st collective flap (overdamped, slow)", "1st backward-whirl flap #2"
+    return text + overdamped_text(mode) + duplicate_text(mode)
 
 
 def mode_file_stem(position: int, mode) -> str:
@@ -438,9 +439,10 @@ def plot_campbell(result, path, max_hz=None, max_rays: int = 12, tracks="table2"
     if tracks == "all":
         tracks = list(result.tracks)
     elif tracks == "table2":
-        # a track labelled "X #k" (a label reused by a later track) has the family and index
-        # of the track "X": mode_label is one-to-one in (family, symmetry, index)
-        tracks = [t for t in result.tracks if t.family in ("yaw", "teeter") or t.index <= 2]
+        # a track labelled "X #k" (a label reused by a later track, or a second mode named
+        # after one vacuum mode) is left to "all": one curve per name
+        tracks = [t for t in result.tracks if (t.family in ("yaw", "teeter") or t.index <= 2)
+                  and "#" not in t.label]
     else:
         wanted = list(tracks)
         tracks = [t for t in result.tracks if t.label in wanted]

@@ -23,13 +23,19 @@ def overdamped_text(m) -> str:
     return " (overdamped)" if root == "root" else f" (overdamped, {root})"
 
 
+def duplicate_text(m) -> str:
+    """' #2' for the second mode of one name (Mode.duplicate), '' otherwise."""
+    k = getattr(m, "duplicate", None)
+    return f" #{k}" if k else ""
+
+
 def mode_name(m) -> str:
     """'1st antisymmetric flap', '1st backward-whirl lag', 'teeter', '1st side-side tower',
     '1st collective flap (overdamped, slow)'."""
     if m.family in ("yaw", "teeter"):
         return m.family
     return (f"{ordinal(m.index)} {(m.symmetry or '')} {m.family}".replace("  ", " ")
-            + overdamped_text(m))
+            + overdamped_text(m) + duplicate_text(m))
 
 
 def overdamped_pairs(modes, rotor_speed: float) -> list:
