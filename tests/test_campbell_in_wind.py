@@ -228,3 +228,29 @@ def test_an_overdamped_pair_reports_its_damping_ratio_and_natural_frequency():
     assert zeta == pytest.approx(1.5, rel=1e-12)
     assert f0 == pytest.approx(1.6 / (2 * np.pi), rel=1e-12)
     assert mode_name(a) == "1st collective flap (overdamped, slow)"
+
+
+def test_points_in_wind_are_submitted_longest_first(monkeypatch):
+    """Reference: the order known by construction.  A sweep's points in wind go to the
+    executor in decreasing wind speed (the costlier first: no long point left to run alone
+    at the end), the results back in the sweep's order; points in a vacuum keep theirs."""
+    import concurrent.futures as cf
+    from hawt_core.analyses import campbell as C
+
+    class Recorder:
+        def __init__(self):
+            self.submitted = []
+
+        def submit(self, fn, task):
+            self.submitted.append(task["abscissa"])
+            f = cf.Future()
+            f.set_result(fn(task))
+            return f
+
+    monkeypatch.setattr(C, "campbell_point", lambda task: task)
+    for wind, expected in ((object(), [25.0, 11.0, 3.0]), (None, [3.0, 25.0, 11.0])):
+        ex = Recorder()
+        tasks = [{"abscissa": a, "wind": wind} for a in (3.0, 25.0, 11.0)]
+        results, failures, _ = C._run(tasks, ex, None, "points", lambda i: "")
+        assert ex.submitted == expected and not failures
+        assert [r["abscissa"] for r in results] == [3.0, 25.0, 11.0]
