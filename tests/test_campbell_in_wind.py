@@ -256,3 +256,18 @@ def test_points_in_wind_are_submitted_longest_first(monkeypatch):
         results, failures, _ = C._run(tasks, ex, None, "points", lambda i: "")
         assert ex.submitted == expected and not failures
         assert [r["abscissa"] for r in results] == [3.0, 25.0, 11.0]
+
+
+def test_track_names_in_wind_are_their_points_majority_and_unique():
+    """Reference: a synthetic sweep in wind (4 points, three orthogonal shapes, assignment
+    known by construction).  A track is named after the name its points give its mode most
+    often (the first point's "B" loses to three "C"), Track.names keeps each point's own;
+    labels stay unique when a point's own name carries a '#' already: two more tracks named
+    "A" and "A #2" by their points become "A #2" and "A #3" (not two "A #2")."""
+    Q, _ = np.linalg.qr(np.random.default_rng(3).normal(size=(12, 4)))
+    pts = [_point([Q[:, 0], Q[:, 1], Q[:, 2], Q[:, 3]], [1.0, 2.0, 3.0, 4.0],
+                  ["B" if k == 0 else "C", "A", "A", "A #2"], speed=1.0, wind=5.0 + k)
+           for k in range(4)]
+    tracks = track_modes(pts)
+    assert [t.label for t in tracks] == ["C", "A", "A #2", "A #3"]
+    assert tracks[0].names == ["B", "C", "C", "C"]

@@ -322,14 +322,18 @@ def track_modes(points: Sequence[dict], min_mac: float = MIN_MAC,
     if in_wind:
         for t in tracks:
             _majority_name(t)
-    # unique labels (a label reused by a track born later gets a suffix)
-    seen = {}
+    # unique labels (a label reused by a track born later gets a suffix: the next free one,
+    # a label that is a point's "X #2" already included)
+    used: set = set()
     out = []
     for t in tracks:
         lab = t["label"]
-        seen[lab] = seen.get(lab, 0) + 1
-        if seen[lab] > 1:
-            lab = f"{lab} #{seen[lab]}"
+        if lab in used:
+            base, k = lab.split(" #")[0], 2
+            while f"{base} #{k}" in used:
+                k += 1
+            lab = f"{base} #{k}"
+        used.add(lab)
         v = t["vals"]
         # the offsets that keep the curve continuous, from the values themselves (the MAC's
         # re-indexings only decide the assignment: reported frequencies follow the motion
