@@ -188,6 +188,20 @@ def test_turbine_flutter_sweep_finds_the_damping_crossing(tmp_path, capsys):
     assert "--wind U and --rpm" in capsys.readouterr().err
 
 
+def test_turbine_flutter_of_a_shipped_turbine_takes_the_schedules_pitch(capsys):
+    """``hawt flutter nrel5mw --wind 11 --rpm 11:13:2`` without --pitch: the pitch comes from
+    the shipped turbine's DISCON.IN (the rosco wheel's schedule: 0 deg at 11 m/s, below
+    rated), and the sweep runs (it raised AttributeError: the flutter command's CASE was not
+    the schedule's turbine).  Frozen wake, 2 elements: a smoke test of the command."""
+    assert cli.main(["flutter", "nrel5mw", "--wind", "11", "--rpm", "11:13:2", "-n", "2",
+                     "--inflow", "frozen", "--airfoil", "quasi-steady", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    point = out["settings"]["operating_point"]
+    assert out["pitch_deg"] == pytest.approx(0.0, abs=1e-9)
+    assert point["rotor_speed_rpm"] == pytest.approx(11.0, rel=1e-12)
+    assert "DISCON.IN" in point["source"] and len(out["rotor_speeds"]) == 2
+
+
 def test_simulate_command_in_wind(tmp_path, capsys):
     """``hawt simulate FILE --wind U --rotor-speed W --pitch P``: runs from the steady state in
     wind and reports a finite final state (the teeter angle of a symmetric rotor in axial wind

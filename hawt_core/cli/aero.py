@@ -166,6 +166,7 @@ def _turbine_flutter(args) -> int:
     if args.rpm[0] <= 0 or len(args.rpm) < 2:
         raise ValueError("--rpm: need COUNT >= 2 rotor speeds > 0 [rpm]")
     turbine = load(args.case)
+    args.turbine = args.case        # the shipped turbine's DISCON.IN gives the pitch at --wind
     args.rotor_speed = args.rpm[0] * math.pi / 30       # the operating point's pitch only
     check_wind_args(args)
     turbine, wind, point = turbine_in_wind(args, turbine)
