@@ -22,7 +22,8 @@ from ..numerics.pencil import finite_modes, sparse_modes
 from ..numerics.threads import blas_threads
 from ..results.modes import BladeMode, BladeModesResult, mode_shape
 
-__all__ = ["blade_modes", "SPARSE_THRESHOLD", "DEFAULT_SPARSE_COUNT"]
+__all__ = ["blade_modes", "spinning_modes", "energy_names", "SPARSE_THRESHOLD",
+           "DEFAULT_SPARSE_COUNT"]
 
 
 #: Above this many unknowns, ``method="auto"`` uses the sparse shift-invert path.
@@ -61,11 +62,15 @@ def blade_modes(turbine: Turbine, elements: Optional[int] = None,
         return _blade_modes(turbine, elements, rotor_speed, count, method, band_factor, max_hz)
 
 
-def _blade_modes(turbine, elements, rotor_speed, count, method, band_factor, max_hz=None):
-    model = SpinningBlade(turbine, elements, rotor_speed)
+def spinning_modes(model: SpinningBlade, count: Optional[int], method: str,
+                   band_factor: float) -> tuple:
+    """(y0, lam, X, order, method) of the blade ``model`` (a SpinningBlade): its steady state,
+    the finite eigenpairs of its linearization (``method`` as blade_modes', "auto" resolved),
+    and their order: oscillatory modes by frequency, then the real exponents (the overdamped
+    branch of structural damping, near -1/mu) by decay rate, so that "1st flap" is a
+    vibration; the first ``count`` of them (all: None)."""
     y0 = model.steady_state()
     Jy, Jd = model.jacobians(np.zeros(model.n), y0)
-    om = model.rotor_speed
     band = band_factor * frequency_bound(model.beam.props)
     if method == "auto":
         method = "sparse" if model.n > SPARSE_THRESHOLD else "dense"
@@ -74,23 +79,36 @@ def _blade_modes(turbine, elements, rotor_speed, count, method, band_factor, max
         lam, X = sparse_modes(-Jy, Jd, k, band=band)
     else:
         lam, X = finite_modes(-Jy.toarray(), Jd.toarray(), band)
-    # oscillatory modes by frequency, then the real exponents (the overdamped branch of
-    # structural damping, near -1/mu) by decay rate, so that "1st flap" is a vibration
     real = np.abs(lam.imag) <= 1e-3 * np.abs(lam)
     order = np.lexsort((lam.real, np.abs(lam.imag), np.abs(lam.real) * real, real))
     if count is not None:
         order = order[:count]
+    return y0, lam, X, order, method
+
+
+def energy_names(beam, X: np.ndarray) -> tuple:
+    """(families, indices) of the modes X's columns, in their order: each mode's family the
+    one holding most of its strain energy (classify_energy), counted within the family."""
+    families, indices, counts = [], [], {}
+    for j in range(X.shape[1]):
+        fam = FAMILIES[int(np.argmax(classify_energy(beam, X[:, j])))]
+        counts[fam] = counts.get(fam, 0) + 1
+        families.append(fam)
+        indices.append(counts[fam])
+    return families, indices
+
+
+def _blade_modes(turbine, elements, rotor_speed, count, method, band_factor, max_hz=None):
+    model = SpinningBlade(turbine, elements, rotor_speed)
+    y0, lam, X, order, method = spinning_modes(model, count, method, band_factor)
+    om = model.rotor_speed
     if max_hz is not None:
         order = order[np.abs(lam[order].imag) / (2 * np.pi) <= max_hz]
     modes = []
-    counts = {}
-    for j in order:
+    for j, fam, index in zip(order, *energy_names(model.beam, X[:, order])):
         x = X[:, j]
-        energy = classify_energy(model.beam, x)
-        fam = FAMILIES[int(np.argmax(energy))]
-        counts[fam] = counts.get(fam, 0) + 1
         w = abs(lam[j])
-        modes.append(BladeMode(family=fam, index=counts[fam],
+        modes.append(BladeMode(family=fam, index=index,
                           frequency_per_rev=float(lam[j].imag / om) if om > 0 else float("nan"),
                           frequency_hz=float(lam[j].imag / (2 * np.pi)),
                           damping_ratio=float(-lam[j].real / w) if w > 0 else 0.0,

@@ -26,10 +26,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..assembly import SpinningBlade
-from ..fem.energy import FAMILIES, classify_energy, frequency_bound
-from ..numerics.pencil import finite_modes, sparse_modes
 from ..results.tables import ordinal
-from .blade_modes import SPARSE_THRESHOLD
+from .blade_modes import energy_names, spinning_modes
 
 __all__ = ["BladeReference", "vacuum_blade_reference", "REFERENCE_MODES"]
 
@@ -97,22 +95,11 @@ def vacuum_blade_reference(model, count: int = REFERENCE_MODES) -> BladeReferenc
     if blade.n != model.beam.n:
         raise ValueError(f"the vacuum blade has {blade.n} unknowns, the turbine's blade "
                          f"{model.beam.n}: not the same mesh")
-    y0 = blade.steady_state()
-    Jy, Jd = blade.jacobians(np.zeros(blade.n), y0)
-    band = 100.0 * frequency_bound(blade.beam.props)
-    if blade.n > SPARSE_THRESHOLD:
-        lam, X = sparse_modes(-Jy, Jd, count, band=band)
-    else:
-        lam, X = finite_modes(-Jy.toarray(), Jd.toarray(), band)
-    keep = np.abs(lam.imag) > 1e-3 * np.abs(lam)
-    order = np.argsort(np.abs(lam.imag[keep]))[:count]
-    lam, X = lam[keep][order], X[:, keep][:, order]
-    families, indices, counts = [], [], {}
-    for j in range(lam.size):
-        fam = FAMILIES[int(np.argmax(classify_energy(blade.beam, X[:, j])))]
-        counts[fam] = counts.get(fam, 0) + 1
-        families.append(fam)
-        indices.append(counts[fam])
+    _, lam, X, order, _ = spinning_modes(blade, count, "auto", 100.0)
+    # the oscillatory ones (an undamped blade has no real exponents in the band)
+    order = order[np.abs(lam[order].imag) > 1e-3 * np.abs(lam[order])]
+    lam, X = lam[order], X[:, order]
+    families, indices = energy_names(blade.beam, X)
     rows, weights = _rows(model)
     return BladeReference(families=tuple(families), indices=tuple(indices),
                           frequencies_hz=np.abs(lam.imag) / (2 * np.pi),

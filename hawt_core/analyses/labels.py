@@ -30,8 +30,9 @@ __all__ = ['label_modes', 'separate_degenerate_modes', 'add_fixed_frame', 'famil
 TOWER_DIRECTIONS = ("axial", "side-side", "fore-aft", "torsion")
 
 
-def _tower_motion(model: TurbineModel, x):
-    """Elastic tower motion of eigenvector x as metres: (largest, direction).
+def _tower_motion(model: TurbineModel, x, strain):
+    """Elastic tower motion of eigenvector x as metres: (largest, direction); ``strain``:
+    the tower's strain energy by kind (classify_energy of its unknowns).
 
     The largest of the nodal displacement components (t1 axial, t2 side-side, t3 fore-aft)
     [m] and the torsion (rotation about t1) times the rotor radius (the rotor-tip metres it
@@ -44,8 +45,7 @@ def _tower_motion(model: TurbineModel, x):
     R = model.turbine.hub.radius + model.turbine.blade.length
     u = np.abs(x[tl.u[1:]]).max(axis=0)
     parts = np.array([u[0], u[1], u[2], R * np.abs(x[tl.theta[1:, 0]]).max()])
-    t0 = model.layout.tower_offset
-    e = classify_energy(model.tower, x[t0:t0 + model.tower.n])   # axial, s2, s3, tor, b2, b3
+    e = strain                                          # axial, s2, s3, tor, b2, b3
     energy = np.array([e[0], e[1] + e[5], e[2] + e[4], e[3]])
     j = int(np.argmax(energy)) if energy.sum() > 0 else int(np.argmax(parts))
     return float(parts.max()), TOWER_DIRECTIONS[j]
@@ -82,14 +82,15 @@ def label_modes(model: TurbineModel, fl, columns, reference=None) -> list:
             elastic = max(elastic, np.abs(u).max(), r_g * np.abs(th[:, 0]).max())
             off = lay.blade_offset(k)
             energy += classify_energy(model.beam, x[off:off + model.beam.n])
-        tower, tower_dir = _tower_motion(model, x) if lay.has_tower else (0.0, None)
         # strain energy in the tower against that in the blades: a tower mode of a large
         # rotor drags long, soft blades along (their tips flap more than the tower top moves)
         # while the tower holds most of the strain energy
-        tower_energy = 0.0
+        tower, tower_dir, tower_energy = 0.0, None, 0.0
         if lay.has_tower:
             t0 = lay.tower_offset
-            tower_energy = float(classify_energy(model.tower, x[t0:t0 + model.tower.n]).sum())
+            strain = classify_energy(model.tower, x[t0:t0 + model.tower.n])
+            tower, tower_dir = _tower_motion(model, x, strain)
+            tower_energy = float(strain.sum())
         tower_owns = tower > 0 and (tower >= elastic or tower_energy > float(energy.sum()))
         # the shaft spring's strain energy (same scale as classify_energy: no 1/2)
         shaft_energy = (model.rigid.k_shaft * abs(x[lay["shaft_twist"]]) ** 2

@@ -228,6 +228,14 @@ def _fourier_tol(model: TurbineModel) -> float:
     return share * float(model.interpolation_tol)
 
 
+def _family_exponent_fields(model: TurbineModel, fl, m) -> None:
+    """Set the mode ``m``'s exponent fields (exponent_fields) from the dominant harmonic of
+    its family's motion in ``fl``'s column ``m.column`` (family_exponent)."""
+    for name, value in exponent_fields(family_exponent(model, fl, m.column, m.family),
+                                        fl.omega).items():
+        setattr(m, name, value)
+
+
 def _monodromy_modes(model: TurbineModel, dae: LinearPeriodicDAE, method: str, steps: int,
                      use_fast: bool, rows, wts, d: int, reference=None):
     """Floquet by time marching (Radau IIA or the paper's central differencing): the
@@ -280,10 +288,8 @@ def _monodromy_modes(model: TurbineModel, dae: LinearPeriodicDAE, method: str, s
         # modes alias onto the unit circle and mix into nearly equal multipliers' eigenvectors
         modes = label_modes(model, ref, [b for _, b in pairs], reference)
         for m, (a, _) in zip(modes, pairs):
-            for name, value in exponent_fields(family_exponent(model, fl, a, m.family),
-                                                fl.omega).items():
-                setattr(m, name, value)
             m.column = int(a)
+            _family_exponent_fields(model, fl, m)
     else:
         separate_degenerate_modes(model, fl, resolved)
         modes = label_modes(model, fl, resolved, reference)
@@ -468,9 +474,7 @@ def _modal_analysis(turbine, elements, rotor_speed, steps, method, fast, harmoni
     mark_overdamped(modes)
     for m in (name_after_vacuum(modes, reference) if reference is not None else []):
         # a new family: its own motion's dominant harmonic and whirl
-        for name, value in exponent_fields(family_exponent(model, fl, m.column, m.family),
-                                            fl.omega).items():
-            setattr(m, name, value)
+        _family_exponent_fields(model, fl, m)
         if transform is not None:
             add_fixed_frame(model, transform, fl, [m], rows, wts)
     number_modes(modes)
