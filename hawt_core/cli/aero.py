@@ -306,6 +306,8 @@ def turbine_in_wind(args, turbine):
 #: (attached-flow) airfoil; the frozen-wake quasi-steady model is OpenFAST's linearization's
 #: (MBC3 comparisons) and the other commands' default.
 STABILITY_AERODYNAMICS = ("oye", "jones")
+#: ... and of every other command: the inductions frozen, quasi-steady airfoils
+DEFAULT_AERODYNAMICS = ("frozen", "quasi-steady")
 
 
 def aero_model_args(p, stability: bool = False):
@@ -313,18 +315,18 @@ def aero_model_args(p, stability: bool = False):
     (assembly/rotor_aero.py); ``stability``: the command is a stability analysis, whose
     default is STABILITY_AERODYNAMICS."""
     from ..assembly.rotor_aero import AIRFOIL_MODELS, INFLOW_MODELS
-    inflow, airfoil = STABILITY_AERODYNAMICS if stability else ("frozen", "quasi-steady")
+    inflow, airfoil = STABILITY_AERODYNAMICS if stability else DEFAULT_AERODYNAMICS
     p.set_defaults(stability=stability)
     p.add_argument("--inflow", choices=INFLOW_MODELS, default=None,
-                   help=f"with --wind: the inductions frozen at the operating point's BEM "
-                        f"state, or Oye's dynamic inflow (four states per blade element: the "
+                   help="with --wind: the inductions frozen at the operating point's BEM "
+                        "state, or Oye's dynamic inflow (four states per blade element: the "
                         f"induction lags the loads) (default {inflow}" + (
                             "; frozen is OpenFAST's linearization's, for MBC3 comparisons)"
                             if stability else "; with a controller in the loop oye)"))
     p.add_argument("--airfoil", choices=AIRFOIL_MODELS, default=None,
-                   help=f"with --wind: polars at the quasi-steady angle of attack, or "
-                        f"Theodorsen's attached-flow airfoil with Jones's two-state lag of the "
-                        f"circulatory lift, the three-quarter-chord downwash and the "
+                   help="with --wind: polars at the quasi-steady angle of attack, or "
+                        "Theodorsen's attached-flow airfoil with Jones's two-state lag of the "
+                        "circulatory lift, the three-quarter-chord downwash and the "
                         f"added-mass loads (default {airfoil})")
 
 
@@ -334,16 +336,14 @@ def check_aero_model_args(args):
     and quasi-steady); ``args.inflow_given`` says whether --inflow was given."""
     args.inflow_given = getattr(args, "inflow", None) is not None
     stable = getattr(args, "stability", False) and args.wind is not None
-    for key, default, fallback in (("inflow", STABILITY_AERODYNAMICS[0], "frozen"),
-                                   ("airfoil", STABILITY_AERODYNAMICS[1], "quasi-steady")):
+    chosen = STABILITY_AERODYNAMICS if stable else DEFAULT_AERODYNAMICS
+    for key, default in zip(("inflow", "airfoil"), chosen):
         if hasattr(args, key) and getattr(args, key) is None:
-            setattr(args, key, default if stable else fallback)
+            setattr(args, key, default)
     if args.wind is None:
-        for flag, v in (("--inflow", getattr(args, "inflow", "frozen") != "frozen"),
-                        ("--airfoil", getattr(args, "airfoil", "quasi-steady")
-                         != "quasi-steady")):
-            if v:
-                raise ValueError(f"{flag}: only used with --wind")
+        for key, plain in zip(("inflow", "airfoil"), DEFAULT_AERODYNAMICS):
+            if getattr(args, key, plain) != plain:
+                raise ValueError(f"--{key}: only used with --wind")
 
 
 def wind_args(p, stability: bool = False):
