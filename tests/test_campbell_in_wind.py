@@ -163,6 +163,28 @@ def test_unwrap_does_not_run_away_where_a_curve_levels_off():
     np.testing.assert_array_equal(sh, np.zeros(6))
 
 
+def test_unwrap_does_not_run_away_after_a_steep_step():
+    """Reference: a fixed-frame track of the IEA 15-MW in wind (Oye + Jones, 3:25:23) that
+    falls 0.23 Hz from 10 to 11 m/s (the rotor reaching rated speed) and then stays at
+    13.7-14.2 per-rev (1.72-1.78 Hz) to 25 m/s, moving at most 0.15 per-rev a step: from 11
+    m/s on no whole per-rev shift belongs anywhere.  The linear prediction from the steep
+    step asked for -2 per-rev at 12 m/s (within WIND_UNWRAP_TOL of it), and each next one
+    for -2 more: the curve ran to -1.7 Hz.  A slip of a whole per-rev (SLIP) is still
+    undone."""
+    rpm = np.array([5.68, 6.39, 7.10] + [7.5237] * 14)
+    speeds = rpm * np.pi / 30
+    per_rev = np.array([21.3781, 18.6007, 15.4677, 13.7247, 13.8729, 13.9287, 13.9636,
+                        13.9937, 14.0160, 14.0344, 14.0572, 14.0795, 14.1001, 14.1233,
+                        14.1414, 14.1564, 14.1646])
+    winds = np.arange(8.0, 25.0)
+    sh = unwrap_harmonics(speeds, per_rev, abscissa=winds)
+    np.testing.assert_array_equal(sh[3:], np.zeros(14))
+    slipped = per_rev.copy()
+    slipped[9] -= 1.0
+    sh = unwrap_harmonics(speeds, slipped, abscissa=winds)
+    assert sh[9] == 1.0 and not np.any(sh[10:])
+
+
 @pytest.fixture(scope="module")
 def nrel_in_wind():
     t = load_any("nrel5mw")

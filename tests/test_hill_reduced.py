@@ -20,6 +20,7 @@ from hawt_core.assembly import TurbineModel
 from hawt_core.io.catalog import shipped_controller
 from hawt_core.io.discon import discon_schedule
 from hawt_core.io.turbine_yaml import load_turbine
+from hawt_core.numerics.pencil import equilibrate
 from hawt_core.solvers.multiblade import MultiBladeTransform
 from hawt_core.solvers.periodic import periodic_steady_state
 from meshes import load_paper_mesh
@@ -83,7 +84,8 @@ def test_nrel5mw_in_wind_equals_the_whole_pencil(nrel_8ms, monkeypatch):
 
     def no_correction(found, hill, mats, lu, sigma, E0, Xm, *args):
         L = 2 * hill.H + 1
-        return [(eta, (Xm @ c.reshape(L, -1).T).T, 0.0) for eta, c, _ in found]
+        return [(eta, (Xm @ c.reshape(L, -1).T).T, 0.0, np.full(Xm.shape[0], np.nan))
+                for eta, c, _ in found]
     monkeypatch.setattr(hr, "_out_of_basis", no_correction)
     crude = modes(nrel_8ms, 50.0)
     assert agreement(crude, ref, w)[0] > 1e-5
@@ -126,12 +128,12 @@ def test_strongly_coupled_modes_are_refined_on_the_whole_pencil(nrel_8ms, monkey
     marked = []
 
     def too_coupled(*args, **kwargs):
-        lam, V, tails, H, change, corr = reduced(*args, **kwargs)
+        lam, V, tails, H, change, corr, part = reduced(*args, **kwargs)
         corr = corr.copy()
         corr[:3] = 1.0                    # sorted by frequency: the three lowest
         if not marked:      # the first basis (the wider one, tried next, refines the same)
             marked.extend([lam[:3].copy(), H])
-        return lam, V, tails, H, change, corr
+        return lam, V, tails, H, change, corr, part
     monkeypatch.setattr(hill, "reduced_converged_modes", too_coupled)
     got = modes(nrel_8ms, 20.0)
     monkeypatch.undo()
@@ -341,7 +343,7 @@ def test_a_mode_damped_beyond_heavy_ratio_is_kept_within_its_reported_estimate()
     rows, wts = model.display_rows()
     fc = mbc.fourier(tol=_fourier_tol(model))
     w, stats = mbc.omega, {}
-    lam, V, tails, H, change = hill._reduced_modes(
+    lam, V, tails, H, change, _ = hill._reduced_modes(
         fc, mbc.n, w, 25 * model.rotor_speed, rows, wts ** 2, stats, hill.CONVERGED_TOL)
     assert stats.get("factorizations", 0) <= 1, stats      # no whole-pencil refinement
     by_ratio = (np.abs(lam.real) <= w) & (np.abs(lam.real) > hill.HEAVY_RATIO * np.abs(lam)) \
@@ -353,3 +355,122 @@ def test_a_mode_damped_beyond_heavy_ratio_is_kept_within_its_reported_estimate()
         (ref, _, _), = hill._refine(Ah, Eh, [(eta, None, None, H, np.inf)], H, mbc.n, rows,
                                     wts ** 2, w, {})
         assert abs(ref - eta) / max(abs(eta), w) <= change, (eta, ref, change)
+
+
+@pytest.fixture(scope="module")
+def nrel_8ms_lags():
+    """NREL 5-MW (4 paper elements, tower, drivetrain, gravity, tilt) at 8 m/s with Oye's
+    inflow and Jones's airfoils: (model, multi-blade DAE, Fourier coefficients, its modes
+    below 3 per-rev on the modal basis, the averaged pencil's dense (E0, A0))."""
+    from hawt_core.analyses.labels import aerodynamic_lags
+    from hawt_core.analyses.operating_points import at_operating_point
+    t = load_paper_mesh("nrel5mw")
+    at, _ = at_operating_point(t, 8.0, discon_schedule(shipped_controller("nrel5mw")), None)
+    model = TurbineModel(at, elements=4, wind=Wind(8.0), inflow="oye", airfoil="jones")
+    mbc = MultiBladeTransform(model).dae(periodic_dae(model, periodic_steady_state(model)))
+    rows, wts = model.display_rows()
+    fc = mbc.fourier(tol=_fourier_tol(model))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        hm = hill.hill_modes(mbc, 3.0 * model.rotor_speed, observed=rows, weights=wts ** 2,
+                             truncation="converged", coefficients=fc,
+                             internal=aerodynamic_lags(model))
+    E0, A0 = (m.real.toarray() for m in hill.coefficient_matrices(fc)[0])
+    return model, mbc, fc, hm, E0, A0
+
+
+def _aero_rows(model):
+    from hawt_core.analyses.labels import _aerodynamic_rows
+    return np.concatenate(_aerodynamic_rows(model))
+
+
+def test_participation_is_the_share_of_the_eigenvalue_the_aerodynamic_states_hold(
+        nrel_8ms_lags):
+    """Each mode's participation on the modal basis (hill_reduced._participation: its
+    in-basis right and left vectors, harmonics summed) against two references on the
+    averaged pencil (E0, A0), equilibrated and solved dense with both sides (scipy.linalg.eig,
+    QZ): (1) the same
+    definition (Perez-Arriaga et al. 1982, p_s = (E0^T conj(v_l))_s x_s, |.| normalized)
+    from the dense eigenvectors: the aerodynamic states' share within 0.01 (measured 0.005:
+    the exponents are the periodic system's, up to 1e-2 w from the averaged eigenvalues; a
+    mode with no clear averaged partner is left out, at most a fifth);
+    (2) the physics it stands for: slowing the aerodynamic states by 0.1 % (E0's columns of
+    their rates x 1.001, their time constants longer) moves the averaged eigenvalue by
+    -0.001 x lambda x their (complex) participation: a mode whose share is above 1/2 (the
+    labels' AERODYNAMIC_PARTICIPATION) moves by more than half of the lags' own 0.1 %, one
+    below by less.  Both kinds occur (a lag share >= 0.9 and <= 0.05)."""
+    import scipy.linalg as sla
+    model, mbc, fc, hm, E0, A0 = nrel_8ms_lags
+    assert hm.method == "modal basis" and hm.participation is not None
+    P = hm.participation
+    assert P.shape == (mbc.n, hm.exponents.size)
+    np.testing.assert_allclose(P.sum(axis=0), 1.0, rtol=1e-12)
+    aero = _aero_rows(model)
+    # equilibrated (row and column scalings: the same eigenvalues and participations; QZ on
+    # the raw pencil, whose algebraic columns are zero in E0, loses a tower mode's digits)
+    As, Es, _ = equilibrate(A0, E0)
+    lam, VL, VR = sla.eig(As, Es, left=True, right=True)
+    ok = np.isfinite(lam)
+    lam, VL, VR = lam[ok], VL[:, ok], VR[:, ok]
+    eps = 1e-3
+    slowed = Es.copy()
+    slowed[:, aero] *= 1 + eps
+    lam_s = sla.eigvals(As, slowed)
+    lam_s = lam_s[np.isfinite(lam_s)]
+    w = mbc.omega
+    shares = P[aero].sum(axis=0)
+    matched = 0
+    for i, eta in enumerate(hm.exponents):
+        d = np.abs(lam - eta)
+        j, k = np.argsort(d)[:2]
+        if d[j] > 2e-2 * w or d[k] < 3 * d[j]:
+            continue            # the periodic coupling moved it: no clear averaged partner
+        matched += 1
+        p = np.abs((Es.T @ VL[:, j].conj()) * VR[:, j])
+        p /= p.sum()
+        assert abs(shares[i] - p[aero].sum()) <= 0.01, (eta, shares[i], p[aero].sum())
+        moved = lam_s[int(np.argmin(np.abs(lam_s - lam[j])))] - lam[j]
+        assert (abs(moved / (eps * lam[j])) > 0.5) == (shares[i] > 0.5), (eta, shares[i])
+    assert matched >= 0.8 * hm.exponents.size
+    assert shares.max() >= 0.9 and shares.min() <= 0.05
+
+
+def test_modes_are_labelled_aerodynamic_by_where_their_eigenvalue_lies(nrel_8ms_lags):
+    """modal_analysis on the same turbine and wind (Hill's method in multi-blade
+    coordinates on the modal basis): a mode is labelled 'aerodynamic' exactly when its
+    eigenvalue belongs mostly to the blades' inflow and lag states.  Reference: the
+    averaged pencil solved dense (equilibrated QZ) with the aerodynamic states slowed by
+    0.1 %: a mode whose eigenvalue (its fixed-frame exponent, matched to the nearest dense
+    eigenvalue) moves by more than half of -0.001 lambda is theirs.  Checks the plumbing
+    from Hill's modes to the labels (columns, conjugates, real exponents)."""
+    import scipy.linalg as sla
+    from hawt_core.analyses.modal import modal_analysis
+    model, mbc, fc, hm, E0, A0 = nrel_8ms_lags
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = modal_analysis(model.turbine, elements=4, wind=Wind(8.0), inflow="oye",
+                             airfoil="jones", max_per_rev=3.0)
+    assert res.settings["method"] == "hill"
+    aero = _aero_rows(model)
+    As, Es, _ = equilibrate(A0, E0)
+    lam = sla.eigvals(As, Es)
+    lam = lam[np.isfinite(lam) & (lam.imag >= -1e-9)]          # one of each pair
+    eps = 1e-3
+    slowed = Es.copy()
+    slowed[:, aero] *= 1 + eps
+    lam_s = sla.eigvals(As, slowed)
+    lam_s = lam_s[np.isfinite(lam_s)]
+    Omega = model.rotor_speed
+    kinds, checked = set(), 0
+    for m in res.modes:
+        eta = complex(m.real_per_rev, abs(m.fixed_frame_per_rev)) * Omega
+        d = np.abs(lam - eta)
+        j, k = np.argsort(d)[:2]
+        if d[j] > 2e-2 * mbc.omega or d[k] < 3 * d[j]:
+            continue
+        moved = lam_s[int(np.argmin(np.abs(lam_s - lam[j])))] - lam[j]
+        assert (abs(moved / (eps * lam[j])) > 0.5) == (m.family == "aerodynamic"), \
+            (m.family, eta, moved / (eps * lam[j]))
+        kinds.add(m.family == "aerodynamic")
+        checked += 1
+    assert kinds == {True, False} and checked >= 0.8 * len(res.modes)

@@ -466,6 +466,11 @@ def _mark_twins(tracks: list, speeds: np.ndarray) -> None:
 WIND_UNWRAP_TOL = 0.1
 
 
+#: unwrap_harmonics: a value closer than this [per-rev] to the last point's is not a
+#: harmonic slip (a slip moves the reported frequency by a whole per-rev).
+SLIP = 0.5
+
+
 def unwrap_harmonics(speeds: np.ndarray, per_rev: np.ndarray, tol: float = 0.25,
                      abscissa=None) -> np.ndarray:
     """Integer per-rev shifts that make a track continuous.
@@ -504,10 +509,13 @@ def unwrap_harmonics(speeds: np.ndarray, per_rev: np.ndarray, tol: float = 0.25,
             pred = pred_hz * 2 * np.pi / w
             last = hist[-1][1] * 2 * np.pi / w          # constant Hz from the last point
             k = float(np.round(pred - f))
-            # a value within tol of the last point's (constant Hz) is not a jump: a linear
-            # prediction over coarse steps (a sweep in wind) would otherwise shift a mode
-            # that merely levels off, and the next prediction run away by a per-rev a step
-            if k != 0 and abs(f + k - pred) < tol and abs(f - last) >= tol:
+            # a value within half a per-rev of the last point's (constant Hz) is not a
+            # jump (a slip moves it by a whole one): a linear prediction over coarse steps
+            # (a sweep in wind) would otherwise shift a mode that merely levels off, and the
+            # next prediction run away by a per-rev a step (IEA 15-MW, a track that fell
+            # 0.23 Hz from 10 to 11 m/s and moved 0.15 per-rev to 12 m/s: -2 per-rev a step
+            # from there, to -1.7 Hz at 25 m/s, with a tolerance of WIND_UNWRAP_TOL here)
+            if k != 0 and abs(f + k - pred) < tol and abs(f - last) >= SLIP:
                 shift[i] = k
         hist.append((xi, (f + shift[i]) * w / (2 * np.pi)))
     return shift

@@ -51,10 +51,13 @@ def _tower_motion(model: TurbineModel, x, strain):
     return float(parts.max()), TOWER_DIRECTIONS[j]
 
 
-def label_modes(model: TurbineModel, fl, columns, reference=None) -> list:
+def label_modes(model: TurbineModel, fl, columns, reference=None, participation=None) -> list:
     """Modes (unsorted indices) labelled from their Floquet eigenvectors x(0); with a
     ``reference`` (blade_reference.BladeReference: the vacuum blade modes, in wind) a blade
-    mode takes the family and index of the vacuum mode its blades move most like."""
+    mode takes the family and index of the vacuum mode its blades move most like; with
+    ``participation`` (n, columns of fl: the states' participation in each mode, Hill's
+    modal basis) a mode is the blades' aerodynamic states' when they hold most of it
+    (_aerodynamic_state)."""
     lay = model.layout
     R = model.turbine.hub.radius + model.turbine.blade.length
     sec = model.turbine.blade.sections
@@ -113,7 +116,8 @@ def label_modes(model: TurbineModel, fl, columns, reference=None) -> list:
             else:
                 rig_name = ("teeter" if rigid.get("teeter", 0.0) >= 0.25 * rigid.get("yaw", 0.0)
                             else "yaw")
-        aero_kind = _aerodynamic_state(model, fl, i, x)
+        aero_kind = _aerodynamic_state(model, fl, i, x,
+                                       None if participation is None else participation[:, i])
         if aero_kind is not None:        # the blades' inflow or lag states, not a structure's
             rig_name = "aerodynamic"
             family, symmetry, phase = "aerodynamic", aero_kind, None
@@ -199,39 +203,58 @@ AERODYNAMIC_SHARE = 10.0
 NON_OSCILLATORY = 1e-3
 
 
+def _aerodynamic_rows(model: TurbineModel):
+    """The rows of the blades' (induction, lag) states: Oye's inflow and Jones's lags."""
+    lay = model.layout
+    names = model.aero.state_names
+
+    def rows(group):
+        r = [lay.aero_states_of(k, n).ravel() for k in range(model.n_blades) for n in group]
+        return np.concatenate(r) if r else np.zeros(0, int)
+    return (rows([n for n in names if not n.startswith("alpha")]),
+            rows([n for n in names if n.startswith("alpha")]))
+
+
 def _aerodynamic_sizes(model: TurbineModel, X):
     """(inflow, airfoil, structure) of the eigenvectors X (n, m) or x (n,): the largest
     induction state (dimensionless), the largest lag state (rad) and the largest structural
     motion as a fraction of the rotor radius (display rows: elastic and rigid tip metres
     over R), per column."""
-    lay = model.layout
-    names = model.aero.state_names
     X = np.asarray(X)
 
-    def largest(group):
-        rows = [lay.aero_states_of(k, n).ravel() for k in range(model.n_blades) for n in group]
-        if not rows:
-            return np.zeros(X.shape[1:])
-        return np.abs(X[np.concatenate(rows)]).max(axis=0)
+    def largest(rows):
+        return np.abs(X[rows]).max(axis=0) if rows.size else np.zeros(X.shape[1:])
 
+    inflow, airfoil = _aerodynamic_rows(model)
     rows, wts = model.display_rows()
     R = model.turbine.hub.radius + model.turbine.blade.length
     W = wts if X.ndim == 1 else wts[:, None]
-    return (largest([n for n in names if not n.startswith("alpha")]),
-            largest([n for n in names if n.startswith("alpha")]),
-            np.abs(X[rows] * W).max(axis=0) / R)
+    return largest(inflow), largest(airfoil), np.abs(X[rows] * W).max(axis=0) / R
 
 
-def _aerodynamic_state(model: TurbineModel, fl, i: int, x) -> Optional[str]:
+#: A mode whose participation (Hill's modal basis: analyses/modal.py) lies more than this
+#: share in the blades' aerodynamic states is theirs (the eigenvalue is mostly theirs).
+AERODYNAMIC_PARTICIPATION = 0.5
+
+
+def _aerodynamic_state(model: TurbineModel, fl, i: int, x, participation=None) -> Optional[str]:
     """"inflow" or "airfoil" for a mode of the blades' aerodynamic states (assembly/
-    rotor_aero.py: Oye's inflow, Jones's lag), else None: the largest induction state of its
+    rotor_aero.py: Oye's inflow, Jones's lag), else None.  With the states' ``participation``
+    in the mode (n,): its aerodynamic states hold more than AERODYNAMIC_PARTICIPATION of it
+    (scale-free: a heavily damped root where a lag and the flap it drags mix is named after
+    the one its eigenvalue belongs to most).  Without: the largest induction state of its
     vector (dimensionless) exceeds AERODYNAMIC_SHARE times its largest structural motion as
     a fraction of the rotor radius (elastic and rigid tip metres over R), or the largest
     aerodynamic state (inductions, lag angles in rad) exceeds that motion in a
-    non-oscillatory mode (an inflow mode with the flap it drags); named by the state group
-    that moves most."""
+    non-oscillatory mode (an inflow mode with the flap it drags).  Named by the state group
+    that moves (or participates) most."""
     if not getattr(model, "n_aero", 0):
         return None
+    if participation is not None and np.all(np.isfinite(participation)):
+        shares = {kind: float(participation[rows].sum())
+                  for kind, rows in zip(("inflow", "airfoil"), _aerodynamic_rows(model))}
+        kind = max(shares, key=shares.get)
+        return kind if sum(shares.values()) > AERODYNAMIC_PARTICIPATION else None
     inflow, airfoil, structure = (float(v) for v in _aerodynamic_sizes(model, x))
     size = {"inflow": inflow, "airfoil": airfoil}
     kind = max(size, key=size.get)

@@ -302,7 +302,9 @@ def _hill_floquet(model: TurbineModel, dae: LinearPeriodicDAE, transform, max_pe
     or with ``transform`` (a MultiBladeTransform) the system in multi-blade coordinates
     (constant for an isotropic rotor without gravity: one eigenproblem).  Returns the
     rotating-frame FloquetResult (samples x(t) = T(t) q(t) e^{eta t} over a revolution, so that
-    labels, shapes and Campbell tracking work as for the marching) and the HillModes."""
+    labels, shapes and Campbell tracking work as for the marching), the HillModes and the
+    states' participation (n, columns of the FloquetResult) in its modes (None when Hill's
+    method searched the whole pencil)."""
     # the rotor period (a multi-blade DAE's own period is T / Nb), nominal at standstill
     T = model.period if np.isfinite(model.period) else STANDSTILL_PERIOD
     omega = 2 * np.pi / T
@@ -347,7 +349,12 @@ def _hill_floquet(model: TurbineModel, dae: LinearPeriodicDAE, transform, max_pe
     fl = periodic_modes(eta0, X, x0, len(upper), period=T, sample_rows=srows, observed=obs,
                         weights=wts ** 2, method="hill", steps=0, fast=False, blades=1,
                         n_dynamic=d, timings=dict(hm.timings))
-    return fl, hm
+    # the states' participation per column of fl (its uppers, their conjugates, the reals)
+    part = None
+    if hm.participation is not None:
+        part = hm.participation[:, [order[c] for c in range(len(upper))] * 2
+                                + [order[c] for c in range(len(upper), len(order))]]
+    return fl, hm, part
 
 
 def modal_analysis(turbine: Turbine, elements: Optional[int] = None,
@@ -452,11 +459,12 @@ def _modal_analysis(turbine, elements, rotor_speed, steps, method, fast, harmoni
                  else STANDSTILL_MAX_HZ if standstill else DEFAULT_MAX_PER_REV)
         frame = "multi-blade" if mbc is not None else ("fixed" if standstill else "rotating")
         stage(0.3, f"Hill's method ({frame} frame, modes below {limit:g} per-rev)")
-        fl, hm = _hill_floquet(model, mbc if mbc is not None else dae,
-                               transform if mbc is not None else None, limit, rows, wts, d)
+        fl, hm, participation = _hill_floquet(model, mbc if mbc is not None else dae,
+                                              transform if mbc is not None else None, limit,
+                                              rows, wts, d)
         use_fast, steps = False, None
         separate_degenerate_modes(model, fl, fl.modes())
-        modes = label_modes(model, fl, fl.modes(), reference)
+        modes = label_modes(model, fl, fl.modes(), reference, participation)
         unresolved = max(0, d - int(fl.exponents.size))     # above the band
         extra = {"frame": frame, "hill_harmonics": hm.harmonics,
                  "hill_size": hm.size, "coefficient_harmonics": hm.coefficient_harmonics}

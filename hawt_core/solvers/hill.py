@@ -108,6 +108,9 @@ class HillModes:
     #: how the band was searched: "whole pencil" (sparse shift-invert on Hill's pencils) or
     #: "modal basis" (hill_reduced.py, weakly periodic systems)
     method: str = "whole pencil"
+    #: on the modal basis: every state's participation (n, m) in each mode (shares summing
+    #: to 1, hill_reduced._participation); None from the whole pencil
+    participation: Optional[np.ndarray] = None
 
     def periodic(self, i: int, times, rows=None) -> np.ndarray:
         """p_i(t) (len(times), rows) from the harmonics."""
@@ -384,14 +387,15 @@ def hill_modes(dae: LinearPeriodicDAE, max_frequency: float, harmonics: Optional
             except (ReductionFailed, spla.ArpackError, np.linalg.LinAlgError):
                 pass        # it does not apply here: the whole pencil
         method = "whole pencil" if found is None else "modal basis"
-        lam, V, tails, H, change = found if found is not None else _converged_modes(
-            fc, n, w, float(max_frequency), obs, wts, stats, converged_tol)
+        lam, V, tails, H, change, part = found if found is not None else (*_converged_modes(
+            fc, n, w, float(max_frequency), obs, wts, stats, converged_tol), None)
         return HillModes(exponents=lam, vectors=V, tail=tails, harmonics=H, omega=w,
                          size=n * (2 * H + 1), coefficient_harmonics=J,
                          timings={"coefficients": t1 - t0,
                                   "eigen": time.perf_counter() - t1,
                                   "factorizations": stats.get("factorizations", 0)},
-                         solves=stats.get("solves", 0), change=change, method=method)
+                         solves=stats.get("solves", 0), change=change, method=method,
+                         participation=part)
     change = None
     for attempt, H in enumerate(H_list):
         Ah, Eh = hill_pencil(fc, H)
@@ -515,7 +519,8 @@ def _converged_modes(fc, n: int, w: float, band: float, obs, wts, stats: dict, t
 def _reduced_modes(fc, n: int, w: float, band: float, obs, wts, stats: dict, tol: float,
                    internal=None):
     """The "converged" truncation on the averaged system's modal basis
-    (hill_reduced.reduced_converged_modes): (lam, V, tails, H, change).  Modes whose
+    (hill_reduced.reduced_converged_modes): (lam, V, tails, H, change, participation)
+    (participation (n, m): a refined mode keeps its basis mode's).  Modes whose
     estimated reduction error (CORRECTION_TRUST x their second-order corrections) exceeds
     ``tol`` (a coupling too strong for the reduction) are refined one by one on the whole
     pencil (_refine) at H, H + 1, ... until they move by at most ``tol``; ``change`` is the
@@ -531,7 +536,7 @@ def _reduced_modes(fc, n: int, w: float, band: float, obs, wts, stats: dict, tol
     margins = BASIS_MARGINS if internal is None else BASIS_MARGINS[:1]
     for margin in margins:
         try:
-            lam, V, tails, H, change, corrections = reduced_converged_modes(
+            lam, V, tails, H, change, corrections, part = reduced_converged_modes(
                 mats, n, w, band, obs, wts, stats, tol, MAX_HARMONICS, margin=margin,
                 internal=internal, cache=cache)
         except ReductionFailed:
@@ -549,13 +554,13 @@ def _reduced_modes(fc, n: int, w: float, band: float, obs, wts, stats: dict, tol
                            tol if internal is None else max(tol, LAG_TOL))
         weak = np.flatnonzero(estimate > allowed)
         if best is None or weak.size < best[-1].size:
-            best = (lam, V, tails, H, change, estimate, allowed, weak)
+            best = (lam, V, tails, H, change, part, estimate, allowed, weak)
         if not weak.size:
             break
     # a narrow band's basis may leave out the modes a damped mode couples with (NREL 5-MW
     # at 11 m/s, band 3.4 Hz: two flap modes refined on the whole pencil, 28 s; with the
     # wider basis none, 4 s): the wider basis is tried before any refinement
-    lam, V, tails, H, change, estimate, allowed, weak = best
+    lam, V, tails, H, change, part, estimate, allowed, weak = best
     if weak.size and internal is not None:
         # with the aerodynamic lags the whole pencil factorizes in minutes per mode: the
         # modes are kept at their estimate, reported in ``change`` and said
@@ -563,10 +568,10 @@ def _reduced_modes(fc, n: int, w: float, band: float, obs, wts, stats: dict, tol
                       f"reduction error up to {estimate[weak].max():.1e} (above "
                       f"{LAG_TOL:.0e}; not refined on the whole pencil, which the "
                       "aerodynamic states make too large)", RuntimeWarning, stacklevel=3)
-        return lam, V, tails, H, max(change, float(estimate.max()))
+        return lam, V, tails, H, max(change, float(estimate.max())), part
     change = max([change, *estimate[estimate <= allowed]])
     if not weak.size:
-        return lam, V, tails, H, change
+        return lam, V, tails, H, change, part
     if weak.size > max(TARGETED_MODES, lam.size // 4):
         raise ReductionFailed(f"{weak.size} of {lam.size} modes are coupled too strongly for "
                               "the modal basis")
@@ -597,7 +602,7 @@ def _reduced_modes(fc, n: int, w: float, band: float, obs, wts, stats: dict, tol
     W = _stack_harmonics([(results[i][1], results[i][3]) if i in results else (V[:, :, i], H)
                           for i in range(lam.size)], n, Hmax)
     order = np.lexsort((lam.real, lam.imag))
-    return lam[order], W[:, :, order], tails[order], Hmax, change
+    return lam[order], W[:, :, order], tails[order], Hmax, change, part[:, order]
 
 
 def _stack_harmonics(parts, n: int, H: int) -> np.ndarray:

@@ -375,11 +375,12 @@ def reduced_converged_modes(mats: dict, n: int, w: float, band: float, obs, wts,
                             internal=None, cache: dict = None):
     """The exponents of the band 0 <= Im <= ``band``, |Re| <= w (Hill's "converged"
     truncation, see hill._converged_modes) on the averaged system's modal basis: (lam, V
-    (2H+1, n, m), tails, H, change, corrections); ``corrections`` (m,): the size of each
-    exponent's second-order corrections (out of the basis, and among the partition's far
-    coordinates) relative to max(|eta|, w): where it exceeds the tolerance, the coupling is
-    too strong for the reduction to be trusted (hill.py refines those modes on the whole
-    pencil).  ``mats``: {j: (E_j, A_j)} the coefficients' complex
+    (2H+1, n, m), tails, H, change, corrections, participation); ``corrections`` (m,): the
+    size of each exponent's second-order corrections (out of the basis, and among the
+    partition's far coordinates) relative to max(|eta|, w): where it exceeds the tolerance,
+    the coupling is too strong for the reduction to be trusted (hill.py refines those modes
+    on the whole pencil); ``participation`` (n, m): the states' participation in each mode
+    (_participation, from its in-basis right and left vectors).  ``mats``: {j: (E_j, A_j)} the coefficients' complex
     harmonics as sparse matrices (hill.coefficient_matrices); ``margin``: the basis reaches
     |lambda| <= margin x band; ``internal``: a test (lam, X) -> bool of averaged modes kept
     out of the basis (the blades' aerodynamic lags: their response is taken whole in the
@@ -435,8 +436,8 @@ def reduced_converged_modes(mats: dict, n: int, w: float, band: float, obs, wts,
                               f"{H_cap} harmonics")
     L = 2 * H + 1
     kk = np.arange(-H, H + 1)
-    lam, vectors, tails, sizes = [], [], [], []
-    for e, p, size in _out_of_basis(found, hill, mats, lu, sigma, E0, Xm, Ym, w, tier):
+    lam, vectors, tails, sizes, parts = [], [], [], [], []
+    for e, p, size, part in _out_of_basis(found, hill, mats, lu, sigma, E0, Xm, Ym, w, tier):
         if e.imag < -eps:           # the conjugate solution: p_k -> conj(p_-k)
             e, p = e.conjugate(), p[::-1].conj()
         if any(abs(e - o) <= 1e-9 * w for o in lam) and abs(e.imag) > eps:
@@ -460,12 +461,14 @@ def reduced_converged_modes(mats: dict, n: int, w: float, band: float, obs, wts,
         vectors.append(p)
         tails.append((energy[0] + energy[-1]) / max(energy.sum(), 1e-300))
         sizes.append(size)
+        parts.append(part)
     lam = np.array(lam, complex)
     V = np.array(vectors).transpose(1, 2, 0) if vectors else np.zeros((L, n, 0), complex)
     tails, sizes = np.array(tails), np.array(sizes)
+    part = np.array(parts).T if parts else np.zeros((n, 0))
     order = np.lexsort((lam.real, lam.imag))
     change = float(move.max()) if move.size else 0.0
-    return lam[order], V[:, :, order], tails[order], H, change, sizes[order]
+    return lam[order], V[:, :, order], tails[order], H, change, sizes[order], part[:, order]
 
 
 def _out_of_basis(found, hill: _ModalHill, mats: dict, lu, sigma: float, E0, Xm, Ym,
@@ -533,8 +536,22 @@ def _out_of_basis(found, hill: _ModalHill, mats: dict, lu, sigma: float, E0, Xm,
         scale = np.maximum(np.abs(eta), w)
         sizes = np.maximum(np.abs(num / den), np.abs(near)) / scale
         new = eta + num / den + near
-        out += [(new[i], (P[:, i] + F[:, i]).T, sizes[i]) for i in range(m)]
+        part = _participation(E0, P, Q)
+        out += [(new[i], (P[:, i] + F[:, i]).T, sizes[i], part[:, i]) for i in range(m)]
     return out
+
+
+def _participation(E0, P: np.ndarray, Q: np.ndarray) -> np.ndarray:
+    """Every state's participation (n, m) in each of m modes with right and left harmonic
+    blocks P, Q (n, m, L) (y^T (A - eta E) = 0): |sum_k (E0^T q_k)_s p_k,s| over the states s,
+    normalized to sum 1 per mode (Perez-Arriaga, Verghese and Schweppe, "Selective modal
+    analysis", IEEE Trans. PAS-101 (9), 1982: p_s = y_s x_s; for a descriptor pencil y^T E
+    takes y's place).  Invariant to the states' scaling: the share of the eigenvalue that a
+    group of states (the blades' aerodynamic lags) carries, whatever their units."""
+    n, m, L = P.shape
+    EQ = np.asarray(E0.T @ Q.reshape(n, m * L)).reshape(n, m, L)
+    part = np.abs(np.einsum("nml,nml->nm", EQ, P))
+    return part / np.maximum(part.sum(axis=0), 1e-300)
 
 
 def _hill_apply(mats: dict, v: np.ndarray, eta: np.ndarray, w: float) -> np.ndarray:
