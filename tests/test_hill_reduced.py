@@ -463,6 +463,8 @@ def test_modes_are_labelled_aerodynamic_by_where_their_eigenvalue_lies(nrel_8ms_
     Omega = model.rotor_speed
     kinds, checked = set(), 0
     for m in res.modes:
+        assert (m.aerodynamic_share > 0.5) == (m.family == "aerodynamic")
+        assert m.to_dict()["aerodynamic_share"] == m.aerodynamic_share
         eta = complex(m.real_per_rev, abs(m.fixed_frame_per_rev)) * Omega
         d = np.abs(lam - eta)
         j, k = np.argsort(d)[:2]

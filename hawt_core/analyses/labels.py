@@ -116,8 +116,9 @@ def label_modes(model: TurbineModel, fl, columns, reference=None, participation=
             else:
                 rig_name = ("teeter" if rigid.get("teeter", 0.0) >= 0.25 * rigid.get("yaw", 0.0)
                             else "yaw")
-        aero_kind = _aerodynamic_state(model, fl, i, x,
-                                       None if participation is None else participation[:, i])
+        part = None if participation is None else participation[:, i]
+        aero_kind = _aerodynamic_state(model, fl, i, x, part)
+        aero_shares = _aerodynamic_shares(model, part)
         if aero_kind is not None:        # the blades' inflow or lag states, not a structure's
             rig_name = "aerodynamic"
             family, symmetry, phase = "aerodynamic", aero_kind, None
@@ -146,6 +147,8 @@ def label_modes(model: TurbineModel, fl, columns, reference=None, participation=
                                          **{f: float(e) for f, e in zip(
                                              ("axial", "shear2", "shear3", "torsion", "flap", "lag"),
                                              energy)}},
+                          aerodynamic_share=None if aero_shares is None
+                          else sum(aero_shares.values()),
                           column=int(i)))
         if shares is not None:
             _name_after(modes[-1], reference, int(np.argmax(shares)), shares)
@@ -237,6 +240,16 @@ def _aerodynamic_sizes(model: TurbineModel, X):
 AERODYNAMIC_PARTICIPATION = 0.5
 
 
+def _aerodynamic_shares(model: TurbineModel, participation) -> Optional[dict]:
+    """{"inflow", "airfoil"}: the blades' induction and lag states' shares of a mode's
+    ``participation`` (n,); None without one (or without aerodynamic states)."""
+    if participation is None or not getattr(model, "n_aero", 0) \
+            or not np.all(np.isfinite(participation)):
+        return None
+    return {kind: float(participation[rows].sum())
+            for kind, rows in zip(("inflow", "airfoil"), _aerodynamic_rows(model))}
+
+
 def _aerodynamic_state(model: TurbineModel, fl, i: int, x, participation=None) -> Optional[str]:
     """"inflow" or "airfoil" for a mode of the blades' aerodynamic states (assembly/
     rotor_aero.py: Oye's inflow, Jones's lag), else None.  With the states' ``participation``
@@ -250,9 +263,8 @@ def _aerodynamic_state(model: TurbineModel, fl, i: int, x, participation=None) -
     that moves (or participates) most."""
     if not getattr(model, "n_aero", 0):
         return None
-    if participation is not None and np.all(np.isfinite(participation)):
-        shares = {kind: float(participation[rows].sum())
-                  for kind, rows in zip(("inflow", "airfoil"), _aerodynamic_rows(model))}
+    shares = _aerodynamic_shares(model, participation)
+    if shares is not None:
         kind = max(shares, key=shares.get)
         return kind if sum(shares.values()) > AERODYNAMIC_PARTICIPATION else None
     inflow, airfoil, structure = (float(v) for v in _aerodynamic_sizes(model, x))

@@ -76,6 +76,10 @@ class Mode:
     #: vacuum mode that names a mode more like it already, analyses/labels.py
     #: name_after_vacuum); None for the first
     duplicate: Optional[int] = None
+    #: in wind with the blades' aerodynamic states (Hill's modal basis): the share of the
+    #: mode's participation those states hold (0 to 1; above 1/2 the mode is theirs,
+    #: family "aerodynamic"); None where not computed
+    aerodynamic_share: Optional[float] = None
     #: the shares along every vacuum blade mode (the reference's order), for the naming
     vacuum_shares: Optional[np.ndarray] = field(default=None, repr=False, compare=False)
 
@@ -103,7 +107,7 @@ class Mode:
                 "whirl": self.whirl, "cyclic_order": self.cyclic_order,
                 "frequency_error": self.frequency_error, "overdamped": self.overdamped,
                 "vacuum_mode": self.vacuum_mode, "vacuum_share": self.vacuum_share,
-                "duplicate": self.duplicate}
+                "duplicate": self.duplicate, "aerodynamic_share": self.aerodynamic_share}
 
 
 @dataclass
