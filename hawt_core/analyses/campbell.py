@@ -125,24 +125,36 @@ def campbell_point(task: dict) -> dict:
 
     ``task``: ``{"turbine": Turbine, "speed": float [rad/s], "elements", "steps", "method",
     "parent_pid": int}``, and for a sweep in wind ``"wind"`` (aero.wind.Wind), ``"rho"``,
-    ``"inflow"``, ``"airfoil"`` (modal_analysis's) and
-    ``"abscissa"`` (the wind speed: the sweep's variable, default the rotor speed), and
+    ``"inflow"``, ``"airfoil"`` (modal_analysis's),
+    ``"abscissa"`` (the wind speed: the sweep's variable, default the rotor speed), optionally
+    ``"schedule"`` (a checked controller schedule: the pitch of its operating point at the
+    wind and the task's rotor speed is found first, analyses/operating_points.py), and
     ``"solver_threads"`` (default 1: the sweep runs a point per CPU).  Top-level and
     picklable (the analysis limits its BLAS threads itself: numerics/threads.py).
 
     Returns ``{"speed", "modes": [mode dict + "label", ...], "vectors": complex (m, n_modes)
     (x(0) on the display rows, tip metres), "harmonics": complex (2K+1, m, n_modes) (Fourier
     coefficients of the periodic eigenvectors on the same rows) or None, "settings", "unresolved", "compute_time", "warnings" (the
-    analysis' warning messages, collected instead of printed), "pid"}``.
+    analysis' warning messages, collected instead of printed), "pid", "pitch_deg" (the
+    pitch analysed [deg, towards feather]) and "operating_point" (with a schedule: its
+    dict, else None)}``.
     """
     pid = os.getpid()
     import warnings
+    turbine, point = task["turbine"], None
     # the sweep runs a point per CPU already: one solver thread per point (``"solver_threads"``
     # overrides it)
     with warnings.catch_warnings(record=True) as caught, \
             solver_threads(int(task.get("solver_threads", 1))):
         warnings.simplefilter("always")
-        res = modal_analysis(task["turbine"], elements=task.get("elements"),
+        if task.get("schedule") is not None:
+            # a sweep in wind: the operating point's pitch is found here, in the worker (the
+            # scheduled rotor speed is the task's): the points' trims run in parallel
+            from .operating_points import at_operating_point
+            turbine, point = at_operating_point(turbine, task["wind"].speed, task["schedule"],
+                                                rotor_speed=float(task["speed"]),
+                                                rho=task.get("rho", 1.225))
+        res = modal_analysis(turbine, elements=task.get("elements"),
                              rotor_speed=float(task["speed"]), steps=task.get("steps"),
                              method=task.get("method"), max_per_rev=task.get("max_per_rev"),
                              wind=task.get("wind"), rho=task.get("rho", 1.225),
@@ -170,7 +182,8 @@ def campbell_point(task: dict) -> dict:
             "vectors": np.ascontiguousarray(vectors), "harmonics": harmonics,
             "settings": dict(res.settings),
             "unresolved": int(res.unresolved), "compute_time": float(res.compute_time),
-            "warnings": messages, "pid": pid}
+            "warnings": messages, "pid": pid,
+            "pitch_deg": float(np.degrees(-turbine.rotor.pitch)), "operating_point": point}
 
 
 # ---------------------------------------------------------------------------- tracking
@@ -736,47 +749,32 @@ def campbell_in_wind(turbine: Turbine, wind_speeds, schedule: dict,
     error (``errors="skip"``)."""
     from dataclasses import replace
     from ..aero.wind import Wind
-    from .operating_points import operating_points
+    from .operating_points import check_schedule, scheduled_rotor_speed
     frame = _check_sweep(turbine, errors, frame)
     winds = np.sort(np.atleast_1d(np.asarray(wind_speeds, float)))
     if winds.ndim != 1 or winds.size < 1 or not np.all(np.isfinite(winds) & (winds > 0)):
         raise ValueError("wind_speeds: need finite wind speeds > 0 [m/s]")
     validate_request(elements, None, steps, method)
+    schedule = check_schedule(schedule)
     t0 = time.perf_counter()
-    if progress is not None:
-        progress(0.0, f"operating points at {winds.size} wind speeds")
-    op = operating_points(turbine, winds, schedule, rho=rho).points
-    speeds = np.array([p["rotor_speed_rpm"] * np.pi / 30 for p in op])
+    # the rotor speeds are the schedule's; each point's pitch (its trim) is found in its task
+    speeds = np.array([scheduled_rotor_speed(turbine, U, schedule) for U in winds])
     if max_hz is None and np.any(speeds > 0):
         max_hz = default_wind_band(turbine, float(np.max(speeds)))
     march, base, max_hz = _sweep_band(speeds, steps, method, max_hz)
-    tasks, where = [], []
-    for i, p in enumerate(op):
-        if not p["converged"]:
-            continue
-        t = replace(turbine, rotor=replace(turbine.rotor, speed=float(speeds[i]),
-                                           pitch=-np.radians(p["pitch_deg"])))
-        tasks.append({"turbine": t, "speed": float(speeds[i]), "elements": elements,
-                      "method": method, "wind": Wind(float(winds[i]), direction=direction),
-                      "rho": rho, "inflow": inflow, "airfoil": airfoil,
-                      "abscissa": float(winds[i]),
-                      **_band(speeds[i], march, base, max_hz, frame)})
-        where.append(i)
-    if not tasks:
-        raise ValueError(f"campbell: no operating point converged ({op[0].get('error')})")
-    done, failed, workers = _run(tasks, executor, progress, "wind speeds",
-                                 lambda j: f"{winds[where[j]]:.4g} m/s done", errors)
-    results: list = [None] * winds.size
-    failures = [(where[j], exc) for j, exc in failed]
-    for j, r in enumerate(done):
-        results[where[j]] = r
-    for i, p in enumerate(op):
-        if not p["converged"]:
-            failures.append((i, RuntimeError(f"operating point: {p.get('error')}")))
-    failures.sort(key=lambda f: f[0])
+    tasks = [{"turbine": replace(turbine, rotor=replace(turbine.rotor, speed=float(speeds[i]))),
+              "schedule": schedule, "speed": float(speeds[i]), "elements": elements,
+              "method": method, "wind": Wind(float(U), direction=direction), "rho": rho,
+              "inflow": inflow, "airfoil": airfoil, "abscissa": float(U),
+              **_band(speeds[i], march, base, max_hz, frame)} for i, U in enumerate(winds)]
+    results, failures, workers = _run(tasks, executor, progress, "wind speeds",
+                                      lambda j: f"{winds[j]:.4g} m/s done", errors)
+    if not any(r is not None for r in results):
+        raise ValueError(f"campbell: no wind speed could be analysed ({failures[0][1]})")
     return _assemble(turbine, speeds, results, failures, errors, max_hz, frame, workers, t0,
                      wind_speeds=winds, extra={
                          "wind_speeds": winds.tolist(), "air_density": rho,
                          "wind_direction_deg": float(np.degrees(direction)),
-                         "pitch_deg": [p["pitch_deg"] for p in op],
+                         "pitch_deg": [r["pitch_deg"] if r is not None else float("nan")
+                                       for r in results],
                          "aerodynamics": _aero_description(turbine, inflow, airfoil)})

@@ -22,6 +22,7 @@ from ..solvers.multiblade import fixed_frame_modes
 
 __all__ = ['label_modes', 'separate_degenerate_modes', 'add_fixed_frame', 'family_exponent',
            'exponent_fields', 'number_modes', 'mark_overdamped', 'name_after_vacuum',
+           'name_tower_hybrids',
            'aerodynamic_lags', 'OVERDAMPED_ZETA', 'VACUUM_NEXT', 'FAMILY_ROWS',
            'TOWER_DIRECTIONS']
 
@@ -204,6 +205,41 @@ AERODYNAMIC_SHARE = 10.0
 #: ... or exceeds it once in a mode that does not oscillate: frequency within this fraction of
 #: the frame's base frequency from a multiple of it.
 NON_OSCILLATORY = 1e-3
+
+
+#: A second mode of one blade name in wind ('#2') whose tower holds at least this many times
+#: the blades' strain energy is the tower's (a tower bending mode whose long blades follow
+#: in a shape of their own: IEA 15-MW 1.78-1.84 Hz, 0.75-0.87 (its partner of the
+#: coupling, the 2nd collective lag at 2.6 Hz, 0.58-0.63, keeps its own name); NREL 5-MW
+#: near 3 Hz above 13 m/s, 0.76-0.80; blade modes that are the first of their name at most
+#: 0.26 on both (1.03 for the NREL 5-MW's collective lag at 25 m/s, named by its blades)).
+TOWER_HYBRID = 0.5
+
+
+def name_tower_hybrids(model: TurbineModel, fl, modes) -> list:
+    """The modes named '#2' (or later) after a vacuum blade mode (name_after_vacuum) whose
+    tower holds at least TOWER_HYBRID times their blades' strain energy become tower modes
+    (the direction of most of the tower's strain energy); returns them (their exponent and
+    fixed-frame fields are the caller's to update)."""
+    lay = model.layout
+    if not lay.has_tower:
+        return []
+    changed = []
+    for m in modes:
+        if not m.duplicate or m.vacuum_family is None:
+            continue
+        x = fl.eigenvectors[:, m.column]
+        t0 = lay.tower_offset
+        strain = classify_energy(model.tower, x[t0:t0 + model.tower.n])
+        blades = sum(float(classify_energy(model.beam, x[lay.blade_offset(k):lay.blade_offset(k)
+                                                         + model.beam.n]).sum())
+                     for k in range(model.n_blades))
+        if float(strain.sum()) >= TOWER_HYBRID * blades:
+            m.family, m.symmetry = "tower", _tower_motion(model, x, strain)[1]
+            m.blade_phase_deg = m.duplicate = None
+            m.vacuum_family = m.vacuum_index = m.vacuum_share = m.vacuum_shares = None
+            changed.append(m)
+    return changed
 
 
 def _aerodynamic_rows(model: TurbineModel):

@@ -49,8 +49,8 @@ from ..solvers.periodic import PeriodicSteadyState, periodic_steady_state
 from ..solvers.steady import constant_steady_state
 from .blade_reference import vacuum_blade_reference
 from .labels import (add_fixed_frame, aerodynamic_lags, exponent_fields, family_exponent,
-                     label_modes, mark_overdamped, name_after_vacuum, number_modes,
-                     separate_degenerate_modes)
+                     label_modes, mark_overdamped, name_after_vacuum, name_tower_hybrids,
+                     number_modes, separate_degenerate_modes)
 
 __all__ = ["modal_analysis", "periodic_dae", "validate_request", "Cancelled", "METHODS",
            "DEFAULT_STEPS", "DEFAULT_MAX_PER_REV", "STEPS_PER_CYCLE", "MIN_STEPS", "MAX_STEPS",
@@ -480,7 +480,12 @@ def _modal_analysis(turbine, elements, rotor_speed, steps, method, fast, harmoni
     else:
         modes.sort(key=lambda m: (m.frequency_per_rev, m.real_per_rev))
     mark_overdamped(modes)
-    for m in (name_after_vacuum(modes, reference) if reference is not None else []):
+    renamed = []
+    if reference is not None:
+        renamed = name_after_vacuum(modes, reference)
+        renamed += [m for m in name_tower_hybrids(model, fl, modes)
+                    if all(m is not r for r in renamed)]
+    for m in renamed:
         # a new family: its own motion's dominant harmonic and whirl
         _family_exponent_fields(model, fl, m)
         if transform is not None:

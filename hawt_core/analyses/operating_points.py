@@ -20,10 +20,13 @@ from scipy.optimize import brentq
 from ..assembly.aero_blade import AeroelasticBlade
 from ..results.operating import OperatingPoints
 
-__all__ = ["operating_points", "at_operating_point"]
+__all__ = ["operating_points", "at_operating_point", "check_schedule", "scheduled_rotor_speed"]
 
 
-def _check_schedule(s: dict) -> dict:
+def check_schedule(s: dict) -> dict:
+    """The schedule ``s`` (a copy) once every field is a finite number in its range;
+    ValueError naming the field, its value and what is allowed otherwise."""
+    s = dict(s)
     need = ("rated_power", "efficiency", "rated_speed", "min_speed", "tsr", "fine_pitch",
             "max_pitch")
     for k in need:
@@ -51,7 +54,7 @@ def operating_points(turbine, wind_speeds, schedule: dict, elements: Optional[in
     max_pitch [rad, towards feather] (io/discon.py reads them from a DISCON.IN).
     ``elements``: per blade, of the blade's order (default: the turbine file's mesh, which
     for the shipped turbines puts the tip deflection within 2e-4 of converged)."""
-    s = _check_schedule(dict(schedule))
+    s = check_schedule(schedule)
     winds = np.asarray(wind_speeds, float)
     if winds.ndim != 1 or winds.size < 1 or np.any(~(winds > 0)):
         raise ValueError("wind_speeds: need wind speeds > 0 [m/s]")
@@ -77,7 +80,7 @@ def operating_points(turbine, wind_speeds, schedule: dict, elements: Optional[in
 
     for i, U in enumerate(winds):
         solved.clear()
-        omega = float(np.clip(s["tsr"] * U / R, s["min_speed"], s["rated_speed"]))
+        omega = scheduled_rotor_speed(turbine, U, s)
         pitch = s["fine_pitch"]
         converged, region = True, 2
         try:
@@ -122,13 +125,22 @@ def operating_points(turbine, wind_speeds, schedule: dict, elements: Optional[in
                                               "(Prandtl, Buhl) at the Gauss points, axial wind"})
 
 
-def at_operating_point(turbine, wind_speed: float, schedule: dict, rotor_speed=None):
+def scheduled_rotor_speed(turbine, wind_speed: float, schedule: dict) -> float:
+    """The rotor speed [rad/s] of the (checked) ``schedule`` at ``wind_speed`` [m/s]: the
+    optimal tip-speed ratio's between the minimum and the rated speed."""
+    R = turbine.hub.radius + turbine.blade.length
+    return float(np.clip(schedule["tsr"] * float(wind_speed) / R, schedule["min_speed"],
+                         schedule["rated_speed"]))
+
+
+def at_operating_point(turbine, wind_speed: float, schedule: dict, rotor_speed=None,
+                       rho: float = 1.225):
     """(turbine, point): ``turbine`` with the rotor speed [rad/s] and pitch of the schedule's
     operating point at ``wind_speed`` [m/s] (``rotor_speed`` given: that speed, the
-    schedule's pitch) and that point (operating_points' dict).  ValueError naming the wind
-    when the schedule has no converged point there."""
+    schedule's pitch) and that point (operating_points' dict; air density ``rho``
+    [kg/m^3]).  ValueError naming the wind when the schedule has no converged point there."""
     U = float(wind_speed)
-    point = operating_points(turbine, [U], schedule).points[0]
+    point = operating_points(turbine, [U], schedule, rho=rho).points[0]
     if not point["converged"]:
         raise ValueError(f"wind: no operating point at {U:g} m/s under the schedule: "
                          f"{point.get('error')}")
