@@ -326,3 +326,37 @@ def test_track_names_in_wind_are_their_points_majority_and_unique():
     tracks = track_modes(pts)
     assert [t.label for t in tracks] == ["C", "A", "A #2", "A #3"]
     assert tracks[0].names == ["B", "C", "C", "C"]
+
+
+def test_a_lightly_damped_second_mode_of_a_name_is_drawn(tmp_path, monkeypatch):
+    """The default Campbell plot (tracks="table2") leaves a second track of one name ('#2')
+    to --all-modes unless it is damped less than DRAWN_DUPLICATE_ZETA somewhere: a mode
+    that matters for stability is drawn.  Reference: three tracks by construction (A; 'A #2'
+    at damping 0.2, 'A #3' at 0.99): the plot labels A and 'A #2', not 'A #3'."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.axes
+    from hawt_core.results.campbell import CampbellResult
+    from hawt_core.results.plotting import DRAWN_DUPLICATE_ZETA
+    assert 0.2 < DRAWN_DUPLICATE_ZETA < 0.99
+    Q = np.eye(6)[:, :3]
+    pts = []
+    for k in range(3):
+        p = _point([Q[:, 0], Q[:, 1], Q[:, 2]], [0.5, 1.0, 0.1], ["A", "A #2", "A #3"],
+                   speed=1.0, wind=5.0 + k)
+        for m, zeta in zip(p["modes"], (0.01, 0.2, 0.99)):
+            m["index"], m["damping_ratio"] = 1, zeta
+        pts.append(p)
+    tracks = track_modes(pts)
+    assert [t.label for t in tracks] == ["A", "A #2", "A #3"]
+    res = CampbellResult(speeds=np.ones(3), tracks=tracks, points=pts,
+                         wind_speeds=np.array([5.0, 6.0, 7.0]))
+    drawn = []
+    real = matplotlib.axes.Axes.annotate
+
+    def spy(self, text, *a, **k):
+        drawn.append(text)
+        return real(self, text, *a, **k)
+    monkeypatch.setattr(matplotlib.axes.Axes, "annotate", spy)
+    res.plot(tmp_path / "c.png")
+    assert set(drawn) == {"A", "A #2"}, drawn

@@ -214,4 +214,5 @@ def _campbell_args(p):
                         "clamped blade's 2nd flap + 1P, a few modes per blade family)")
     p.add_argument("--all-modes", action="store_true",
                    help="plot every track (default: the Table 2 ones: yaw, teeter and the "
-                        "first two of each family and symmetry)")
+                        "first two of each family and symmetry; a second mode of one name, "
+                        "'#2', only when damped below 30 %% somewhere)")

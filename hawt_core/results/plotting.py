@@ -417,6 +417,12 @@ def _spread(y: np.ndarray, gap: float, lo: float, hi: float) -> np.ndarray:
     return out
 
 
+#: plot_campbell's default tracks: a second track of one name ('#2') is drawn when its
+#: damping ratio falls below this somewhere (IEA 15-MW in wind: a forward-whirl flap mode
+#: at 1.5-2 Hz damped 0.19-0.35; the heavily damped ones, 0.98 and more, are left out).
+DRAWN_DUPLICATE_ZETA = 0.3
+
+
 def plot_campbell(result, path, max_hz=None, max_rays: int = 12, tracks="table2",
                   frame: str = "rotating") -> Path:
     """Campbell diagram of a CampbellResult: frequency [Hz] of the tracks against the rotor
@@ -440,9 +446,10 @@ def plot_campbell(result, path, max_hz=None, max_rays: int = 12, tracks="table2"
         tracks = list(result.tracks)
     elif tracks == "table2":
         # a track labelled "X #k" (a label reused by a later track, or a second mode named
-        # after one vacuum mode) is left to "all": one curve per name
+        # after one vacuum mode) is left to "all" unless it is damped less than
+        # DRAWN_DUPLICATE_ZETA somewhere: a mode that matters for stability is drawn
         tracks = [t for t in result.tracks if (t.family in ("yaw", "teeter") or t.index <= 2)
-                  and "#" not in t.label]
+                  and ("#" not in t.label or np.any(t.damping_ratio < DRAWN_DUPLICATE_ZETA))]
     else:
         wanted = list(tracks)
         tracks = [t for t in result.tracks if t.label in wanted]
