@@ -182,7 +182,30 @@ def test_defective_and_degenerate_averaged_pencils_fall_back_to_the_whole_pencil
         assert modes(system, band).method == "whole pencil"
 
 
-def test_with_aerodynamic_lags_the_modal_basis_equals_the_whole_pencil(monkeypatch):
+@pytest.fixture(scope="module")
+def nrel_8ms_lags():
+    """NREL 5-MW (4 paper elements, tower, drivetrain, gravity, tilt) at 8 m/s with Oye's
+    inflow and Jones's airfoils: (model, multi-blade DAE, Fourier coefficients, its modes
+    below 3 per-rev on the modal basis, the averaged pencil's dense (E0, A0))."""
+    from hawt_core.analyses.labels import aerodynamic_lags
+    from hawt_core.analyses.operating_points import at_operating_point
+    t = load_paper_mesh("nrel5mw")
+    at, _ = at_operating_point(t, 8.0, discon_schedule(shipped_controller("nrel5mw")), None)
+    model = TurbineModel(at, elements=4, wind=Wind(8.0), inflow="oye", airfoil="jones")
+    mbc = MultiBladeTransform(model).dae(periodic_dae(model, periodic_steady_state(model)))
+    rows, wts = model.display_rows()
+    fc = mbc.fourier(tol=_fourier_tol(model))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        hm = hill.hill_modes(mbc, 3.0 * model.rotor_speed, observed=rows, weights=wts ** 2,
+                             truncation="converged", coefficients=fc,
+                             internal=aerodynamic_lags(model))
+    E0, A0 = (m.real.toarray() for m in hill.coefficient_matrices(fc)[0])
+    return model, mbc, fc, hm, E0, A0
+
+
+def test_with_aerodynamic_lags_the_modal_basis_equals_the_whole_pencil(nrel_8ms_lags,
+                                                                        monkeypatch):
     """NREL 5-MW (4 paper elements, tower, drivetrain, gravity, tilt) at 8 m/s with Oye's
     dynamic inflow and Jones's unsteady airfoils, modes below BAND per-rev.  Most averaged
     modes are the aerodynamic states' own lags, nearly equal and nearly parallel (no modal
@@ -197,13 +220,8 @@ def test_with_aerodynamic_lags_the_modal_basis_equals_the_whole_pencil(monkeypat
     -0.0023 1/s away, taken whole with the lags: its cyclic twin is found); dropping the
     lags' response loses or moves exponents by > LAG_TOL (the term is needed and seen)."""
     from hawt_core.analyses.labels import LAG_OSCILLATION, aerodynamic_lags
-    from hawt_core.analyses.operating_points import at_operating_point
-    t = load_paper_mesh("nrel5mw")
-    at, _ = at_operating_point(t, 8.0, discon_schedule(shipped_controller("nrel5mw")), None)
-    model = TurbineModel(at, elements=4, wind=Wind(8.0), inflow="oye", airfoil="jones")
-    mbc = MultiBladeTransform(model).dae(periodic_dae(model, periodic_steady_state(model)))
+    model, mbc, fc, *_ = nrel_8ms_lags
     rows, wts = model.display_rows()
-    fc = mbc.fourier(tol=_fourier_tol(model))
     lags = aerodynamic_lags(model)
     Omega, w = model.rotor_speed, mbc.omega
     split = []
@@ -357,31 +375,46 @@ def test_a_mode_damped_beyond_heavy_ratio_is_kept_within_its_reported_estimate()
         assert abs(ref - eta) / max(abs(eta), w) <= change, (eta, ref, change)
 
 
-@pytest.fixture(scope="module")
-def nrel_8ms_lags():
-    """NREL 5-MW (4 paper elements, tower, drivetrain, gravity, tilt) at 8 m/s with Oye's
-    inflow and Jones's airfoils: (model, multi-blade DAE, Fourier coefficients, its modes
-    below 3 per-rev on the modal basis, the averaged pencil's dense (E0, A0))."""
-    from hawt_core.analyses.labels import aerodynamic_lags
-    from hawt_core.analyses.operating_points import at_operating_point
-    t = load_paper_mesh("nrel5mw")
-    at, _ = at_operating_point(t, 8.0, discon_schedule(shipped_controller("nrel5mw")), None)
-    model = TurbineModel(at, elements=4, wind=Wind(8.0), inflow="oye", airfoil="jones")
-    mbc = MultiBladeTransform(model).dae(periodic_dae(model, periodic_steady_state(model)))
-    rows, wts = model.display_rows()
-    fc = mbc.fourier(tol=_fourier_tol(model))
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)
-        hm = hill.hill_modes(mbc, 3.0 * model.rotor_speed, observed=rows, weights=wts ** 2,
-                             truncation="converged", coefficients=fc,
-                             internal=aerodynamic_lags(model))
-    E0, A0 = (m.real.toarray() for m in hill.coefficient_matrices(fc)[0])
-    return model, mbc, fc, hm, E0, A0
-
-
 def _aero_rows(model):
     from hawt_core.analyses.labels import _aerodynamic_rows
     return np.concatenate(_aerodynamic_rows(model))
+
+
+#: The aerodynamic states' slowing in the sensitivity reference (their rates' columns of E0
+#: times 1 + SLOWED: their time constants longer by that share).
+SLOWED = 1e-3
+
+
+def _averaged_dense(model, E0, A0):
+    """The averaged pencil equilibrated (row and column scalings: the same eigenvalues and
+    participations; QZ on the raw pencil, whose algebraic columns are zero in E0, loses a
+    tower mode's digits) and solved dense with both sides: (Es, lam, VL, VR) for Im >= 0,
+    and ``move(j)``: |the move of lam[j] when the aerodynamic states are slowed by SLOWED|
+    over SLOWED |lam[j]| (their participation in it, to first order)."""
+    import scipy.linalg as sla
+    aero = _aero_rows(model)
+    As, Es, _ = equilibrate(A0, E0)
+    lam, VL, VR = sla.eig(As, Es, left=True, right=True)
+    ok = np.isfinite(lam) & (lam.imag >= -1e-9)
+    lam, VL, VR = lam[ok], VL[:, ok], VR[:, ok]
+    slowed = Es.copy()
+    slowed[:, aero] *= 1 + SLOWED
+    lam_s = sla.eigvals(As, slowed)
+    lam_s = lam_s[np.isfinite(lam_s)]
+
+    def move(j):
+        return abs((lam_s[int(np.argmin(np.abs(lam_s - lam[j])))] - lam[j])
+                   / (SLOWED * lam[j]))
+    return Es, lam, VL, VR, move
+
+
+def _partner(lam, eta, w):
+    """The index of the averaged eigenvalue nearest the exponent ``eta`` (Im >= 0), or None
+    when the periodic coupling moved it by more than 2e-2 w or another lies within 3 times
+    that distance (no clear partner)."""
+    d = np.abs(lam - eta)
+    j, k = np.argsort(d)[:2]
+    return None if d[j] > 2e-2 * w or d[k] < 3 * d[j] else int(j)
 
 
 def test_participation_is_the_share_of_the_eigenvalue_the_aerodynamic_states_hold(
@@ -399,38 +432,24 @@ def test_participation_is_the_share_of_the_eigenvalue_the_aerodynamic_states_hol
     -0.001 x lambda x their (complex) participation: a mode whose share is above 1/2 (the
     labels' AERODYNAMIC_PARTICIPATION) moves by more than half of the lags' own 0.1 %, one
     below by less.  Both kinds occur (a lag share >= 0.9 and <= 0.05)."""
-    import scipy.linalg as sla
     model, mbc, fc, hm, E0, A0 = nrel_8ms_lags
     assert hm.method == "modal basis" and hm.participation is not None
     P = hm.participation
     assert P.shape == (mbc.n, hm.exponents.size)
     np.testing.assert_allclose(P.sum(axis=0), 1.0, rtol=1e-12)
     aero = _aero_rows(model)
-    # equilibrated (row and column scalings: the same eigenvalues and participations; QZ on
-    # the raw pencil, whose algebraic columns are zero in E0, loses a tower mode's digits)
-    As, Es, _ = equilibrate(A0, E0)
-    lam, VL, VR = sla.eig(As, Es, left=True, right=True)
-    ok = np.isfinite(lam)
-    lam, VL, VR = lam[ok], VL[:, ok], VR[:, ok]
-    eps = 1e-3
-    slowed = Es.copy()
-    slowed[:, aero] *= 1 + eps
-    lam_s = sla.eigvals(As, slowed)
-    lam_s = lam_s[np.isfinite(lam_s)]
-    w = mbc.omega
+    Es, lam, VL, VR, move = _averaged_dense(model, E0, A0)
     shares = P[aero].sum(axis=0)
     matched = 0
     for i, eta in enumerate(hm.exponents):
-        d = np.abs(lam - eta)
-        j, k = np.argsort(d)[:2]
-        if d[j] > 2e-2 * w or d[k] < 3 * d[j]:
-            continue            # the periodic coupling moved it: no clear averaged partner
+        j = _partner(lam, eta, mbc.omega)
+        if j is None:
+            continue
         matched += 1
         p = np.abs((Es.T @ VL[:, j].conj()) * VR[:, j])
         p /= p.sum()
         assert abs(shares[i] - p[aero].sum()) <= 0.01, (eta, shares[i], p[aero].sum())
-        moved = lam_s[int(np.argmin(np.abs(lam_s - lam[j])))] - lam[j]
-        assert (abs(moved / (eps * lam[j])) > 0.5) == (shares[i] > 0.5), (eta, shares[i])
+        assert (move(j) > 0.5) == (shares[i] > 0.5), (eta, shares[i], move(j))
     assert matched >= 0.8 * hm.exponents.size
     assert shares.max() >= 0.9 and shares.min() <= 0.05
 
@@ -443,7 +462,6 @@ def test_modes_are_labelled_aerodynamic_by_where_their_eigenvalue_lies(nrel_8ms_
     0.1 %: a mode whose eigenvalue (its fixed-frame exponent, matched to the nearest dense
     eigenvalue) moves by more than half of -0.001 lambda is theirs.  Checks the plumbing
     from Hill's modes to the labels (columns, conjugates, real exponents)."""
-    import scipy.linalg as sla
     from hawt_core.analyses.modal import modal_analysis
     model, mbc, fc, hm, E0, A0 = nrel_8ms_lags
     with warnings.catch_warnings():
@@ -451,28 +469,16 @@ def test_modes_are_labelled_aerodynamic_by_where_their_eigenvalue_lies(nrel_8ms_
         res = modal_analysis(model.turbine, elements=4, wind=Wind(8.0), inflow="oye",
                              airfoil="jones", max_per_rev=3.0)
     assert res.settings["method"] == "hill"
-    aero = _aero_rows(model)
-    As, Es, _ = equilibrate(A0, E0)
-    lam = sla.eigvals(As, Es)
-    lam = lam[np.isfinite(lam) & (lam.imag >= -1e-9)]          # one of each pair
-    eps = 1e-3
-    slowed = Es.copy()
-    slowed[:, aero] *= 1 + eps
-    lam_s = sla.eigvals(As, slowed)
-    lam_s = lam_s[np.isfinite(lam_s)]
-    Omega = model.rotor_speed
+    _, lam, _, _, move = _averaged_dense(model, E0, A0)
     kinds, checked = set(), 0
     for m in res.modes:
         assert (m.aerodynamic_share > 0.5) == (m.family == "aerodynamic")
         assert m.to_dict()["aerodynamic_share"] == m.aerodynamic_share
-        eta = complex(m.real_per_rev, abs(m.fixed_frame_per_rev)) * Omega
-        d = np.abs(lam - eta)
-        j, k = np.argsort(d)[:2]
-        if d[j] > 2e-2 * mbc.omega or d[k] < 3 * d[j]:
+        j = _partner(lam, complex(m.real_per_rev, abs(m.fixed_frame_per_rev))
+                     * model.rotor_speed, mbc.omega)
+        if j is None:
             continue
-        moved = lam_s[int(np.argmin(np.abs(lam_s - lam[j])))] - lam[j]
-        assert (abs(moved / (eps * lam[j])) > 0.5) == (m.family == "aerodynamic"), \
-            (m.family, eta, moved / (eps * lam[j]))
+        assert (move(j) > 0.5) == (m.family == "aerodynamic"), (m.family, lam[j], move(j))
         kinds.add(m.family == "aerodynamic")
         checked += 1
     assert kinds == {True, False} and checked >= 0.8 * len(res.modes)
