@@ -380,13 +380,14 @@ def reduced_converged_modes(mats: dict, n: int, w: float, band: float, obs, wts,
     partition's far coordinates) relative to max(|eta|, w): where it exceeds the tolerance,
     the coupling is too strong for the reduction to be trusted (hill.py refines those modes
     on the whole pencil); ``participation`` (n, m): the states' participation in each mode
-    (_participation, from its in-basis right and left vectors).  ``mats``: {j: (E_j, A_j)} the coefficients' complex
-    harmonics as sparse matrices (hill.coefficient_matrices); ``margin``: the basis reaches
-    |lambda| <= margin x band; ``internal``: a test (lam, X) -> bool of averaged modes kept
-    out of the basis (the blades' aerodynamic lags: their response is taken whole in the
-    out-of-basis correction, and they are not followed as exponents); ``cache``: a dict
-    that keeps the averaged pencil's LU and dense spectrum for a call with a wider margin.
-    Raises ReductionFailed when the reduction does not apply."""
+    (_participation, from its in-basis right and left vectors).  ``mats``: {j: (E_j, A_j)}
+    the coefficients' complex harmonics as sparse matrices (hill.coefficient_matrices);
+    ``margin``: the basis reaches |lambda| <= margin x band; ``internal``: a test (lam, X)
+    -> bool of averaged modes kept out of the basis (the blades' aerodynamic lags: their
+    response is taken whole in the out-of-basis correction, and they are not followed as
+    exponents); ``cache``: a dict that keeps the averaged pencil's LU and dense spectrum
+    for a call with a wider margin.  Raises ReductionFailed when the reduction does not
+    apply."""
     E0, A0 = (sp.csc_matrix(m.real) for m in mats[0])
     cache = {} if cache is None else cache
     # internal modes need their exact left partners (the dense solution), and hundreds of
