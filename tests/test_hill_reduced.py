@@ -107,6 +107,7 @@ def test_five_blades_with_gravity_and_tilt_equal_the_whole_pencil(dense, monkeyp
     got = modes(system, 20.0)
     ref = modes(system, 20.0, tol=1e-7, whole=True)
     assert got.method == "modal basis"
+    assert got.timings["dense"] == int(dense)          # the path asked for was taken
     assert got.exponents.size == ref.exponents.size >= 12
     worst, mac = agreement(got, ref, system[0].omega)
     assert worst <= 2e-6 and mac > 0.9999, (worst, mac)

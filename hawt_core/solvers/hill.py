@@ -393,7 +393,9 @@ def hill_modes(dae: LinearPeriodicDAE, max_frequency: float, harmonics: Optional
                          size=n * (2 * H + 1), coefficient_harmonics=J,
                          timings={"coefficients": t1 - t0,
                                   "eigen": time.perf_counter() - t1,
-                                  "factorizations": stats.get("factorizations", 0)},
+                                  "factorizations": stats.get("factorizations", 0),
+                                  # dense eigensolutions of the averaged pencil
+                                  "dense": stats.get("dense", 0)},
                          solves=stats.get("solves", 0), change=change, method=method,
                          participation=part)
     change = None
