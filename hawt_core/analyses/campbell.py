@@ -769,8 +769,7 @@ def campbell_in_wind(turbine: Turbine, wind_speeds, schedule: dict,
               **_band(speeds[i], march, base, max_hz, frame)} for i, U in enumerate(winds)]
     results, failures, workers = _run(tasks, executor, progress, "wind speeds",
                                       lambda j: f"{winds[j]:.4g} m/s done", errors)
-    if not any(r is not None for r in results):
-        raise ValueError(f"campbell: no wind speed could be analysed ({failures[0][1]})")
+    failures.sort(key=lambda f: f[0])       # the lowest wind's error first
     return _assemble(turbine, speeds, results, failures, errors, max_hz, frame, workers, t0,
                      wind_speeds=winds, extra={
                          "wind_speeds": winds.tolist(), "air_density": rho,

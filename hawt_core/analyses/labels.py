@@ -52,6 +52,10 @@ def _tower_motion(model: TurbineModel, x, strain):
     return float(parts.max()), TOWER_DIRECTIONS[j]
 
 
+#: Mode.participation's keys of the blades' strain energy by kind (classify_energy's order)
+STRAIN_KEYS = ("axial", "shear2", "shear3", "torsion", "flap", "lag")
+
+
 def label_modes(model: TurbineModel, fl, columns, reference=None, participation=None) -> list:
     """Modes (unsorted indices) labelled from their Floquet eigenvectors x(0); with a
     ``reference`` (blade_reference.BladeReference: the vacuum blade modes, in wind) a blade
@@ -117,9 +121,9 @@ def label_modes(model: TurbineModel, fl, columns, reference=None, participation=
             else:
                 rig_name = ("teeter" if rigid.get("teeter", 0.0) >= 0.25 * rigid.get("yaw", 0.0)
                             else "yaw")
-        part = None if participation is None else participation[:, i]
-        aero_kind = _aerodynamic_state(model, fl, i, x, part)
-        aero_shares = _aerodynamic_shares(model, part)
+        aero_shares = _aerodynamic_shares(model, None if participation is None
+                                          else participation[:, i])
+        aero_kind = _aerodynamic_state(model, fl, i, x, aero_shares)
         if aero_kind is not None:        # the blades' inflow or lag states, not a structure's
             rig_name = "aerodynamic"
             family, symmetry, phase = "aerodynamic", aero_kind, None
@@ -145,9 +149,8 @@ def label_modes(model: TurbineModel, fl, columns, reference=None, participation=
                           participation={**{k: float(v) for k, v in rigid.items()},
                                          **({"tower": tower} if lay.has_tower else {}),
                                          "elastic": float(elastic),
-                                         **{f: float(e) for f, e in zip(
-                                             ("axial", "shear2", "shear3", "torsion", "flap", "lag"),
-                                             energy)}},
+                                         **{f: float(e) for f, e in zip(STRAIN_KEYS,
+                                                                        energy)}},
                           aerodynamic_share=None if aero_shares is None
                           else sum(aero_shares.values()),
                           column=int(i)))
@@ -232,9 +235,7 @@ def name_tower_hybrids(model: TurbineModel, fl, modes) -> list:
         x = fl.eigenvectors[:, m.column]
         t0 = lay.tower_offset
         strain = classify_energy(model.tower, x[t0:t0 + model.tower.n])
-        blades = sum(float(classify_energy(model.beam, x[lay.blade_offset(k):lay.blade_offset(k)
-                                                         + model.beam.n]).sum())
-                     for k in range(model.n_blades))
+        blades = sum(m.participation[k] for k in STRAIN_KEYS)    # label_modes' count
         if float(strain.sum()) >= TOWER_HYBRID * blades:
             m.family, m.symmetry = "tower", _tower_motion(model, x, strain)[1]
             m.blade_phase_deg = m.duplicate = None
@@ -287,12 +288,12 @@ def _aerodynamic_shares(model: TurbineModel, participation) -> Optional[dict]:
             for kind, rows in zip(("inflow", "airfoil"), _aerodynamic_rows(model))}
 
 
-def _aerodynamic_state(model: TurbineModel, fl, i: int, x, participation=None) -> Optional[str]:
+def _aerodynamic_state(model: TurbineModel, fl, i: int, x, shares=None) -> Optional[str]:
     """"inflow" or "airfoil" for a mode of the blades' aerodynamic states (assembly/
-    rotor_aero.py: Oye's inflow, Jones's lag), else None.  With the states' ``participation``
-    in the mode (n,): its aerodynamic states hold more than AERODYNAMIC_PARTICIPATION of it
-    (scale-free: a heavily damped root where a lag and the flap it drags mix is named after
-    the one its eigenvalue belongs to most).  Without: the largest induction state of its
+    rotor_aero.py: Oye's inflow, Jones's lag), else None.  With their ``shares`` of the
+    mode's participation (_aerodynamic_shares): they hold more than
+    AERODYNAMIC_PARTICIPATION of it (scale-free: a heavily damped root where a lag and the
+    flap it drags mix is named after the one its eigenvalue belongs to most).  Without: the largest induction state of its
     vector (dimensionless) exceeds AERODYNAMIC_SHARE times its largest structural motion as
     a fraction of the rotor radius (elastic and rigid tip metres over R), or the largest
     aerodynamic state (inductions, lag angles in rad) exceeds that motion in a
@@ -300,7 +301,6 @@ def _aerodynamic_state(model: TurbineModel, fl, i: int, x, participation=None) -
     that moves (or participates) most."""
     if not getattr(model, "n_aero", 0):
         return None
-    shares = _aerodynamic_shares(model, participation)
     if shares is not None:
         kind = max(shares, key=shares.get)
         return kind if sum(shares.values()) > AERODYNAMIC_PARTICIPATION else None

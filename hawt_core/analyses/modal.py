@@ -352,8 +352,7 @@ def _hill_floquet(model: TurbineModel, dae: LinearPeriodicDAE, transform, max_pe
     # the states' participation per column of fl (its uppers, their conjugates, the reals)
     part = None
     if hm.participation is not None:
-        part = hm.participation[:, [order[c] for c in range(len(upper))] * 2
-                                + [order[c] for c in range(len(upper), len(order))]]
+        part = hm.participation[:, order[:len(upper)] * 2 + order[len(upper):]]
     return fl, hm, part
 
 
