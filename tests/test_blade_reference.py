@@ -1,5 +1,5 @@
 """Blade modes in wind named after the vacuum blade's modes (analyses/blade_reference.py,
-labels.name_after_vacuum; issue 34 item 3).
+wind_names.name_after_vacuum; issue 34 item 3).
 
 References: the vacuum modes of one blade clamped on the hub spinning at the operating
 point's speed (assembly.SpinningBlade: a separate assembly, no aerodynamics), whose families
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from hawt_core.analyses.blade_reference import BladeReference
-from hawt_core.analyses.labels import VACUUM_NEXT, name_after_vacuum
+from hawt_core.analyses.wind_names import VACUUM_NEXT, name_after_vacuum
 from hawt_core.analyses.modal import modal_at_operating_point
 from hawt_core.io.catalog import load_any, shipped_controller
 from hawt_core.results.modes import Mode

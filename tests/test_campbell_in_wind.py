@@ -253,7 +253,7 @@ def test_nrel5mw_wind_sweep_tracks_are_complete_continuous_and_keep_their_labels
     MAC-tracked mode changes neither family nor index).  No track carries '#': the second
     mode named after the 1st flap (near 3 Hz from 13 m/s, its blades in the 1st flap's shape,
     its tower holding 0.76-0.80 of their strain energy) is the tower's at every point
-    (labels.TOWER_HYBRID: self-consistency of the rule, not a peer's number)."""
+    (wind_names.TOWER_HYBRID: self-consistency of the rule, not a peer's number)."""
     _, res = nrel_in_wind
     principal = {f"{k} {w} {f}" for k, f in (("1st", "flap"), ("2nd", "flap"), ("1st", "lag"))
                  for w in ("backward-whirl", "collective", "forward-whirl")}

@@ -21,10 +21,8 @@ from ..solvers.floquet import dominant_harmonic
 from ..solvers.multiblade import fixed_frame_modes
 
 __all__ = ['label_modes', 'separate_degenerate_modes', 'add_fixed_frame', 'family_exponent',
-           'exponent_fields', 'number_modes', 'mark_overdamped', 'name_after_vacuum',
-           'name_tower_hybrids',
-           'aerodynamic_lags', 'OVERDAMPED_ZETA', 'VACUUM_NEXT', 'FAMILY_ROWS',
-           'TOWER_DIRECTIONS']
+           'exponent_fields', 'number_modes', 'mark_overdamped', 'aerodynamic_lags',
+           'OVERDAMPED_ZETA', 'FAMILY_ROWS', 'TOWER_DIRECTIONS', 'STRAIN_KEYS']
 
 
 #: ``symmetry`` of a tower mode: the dominant tower-top motion
@@ -167,81 +165,12 @@ def _name_after(m: Mode, reference, j: int, shares) -> None:
     m.vacuum_shares = shares
 
 
-#: A blade mode in wind whose most alike vacuum mode names another mode of the same symmetry
-#: already (one more like it) takes its next match if that holds at least this fraction of
-#: its best share (a cyclic 1st torsion mode of a large blade moves as much like the 3rd flap
-#: near it, whose own cyclic modes are named after it); else both keep the name (a second
-#: mode of one name: an aerodynamic state's mode that drags the blades along).
-VACUUM_NEXT = 0.5
-
-
-def name_after_vacuum(modes, reference) -> list:
-    """One name per vacuum mode and symmetry where the shapes allow: within each symmetry
-    (collective, each whirl, symmetric, ...), the oscillatory blade modes in the order of
-    their best share take their most alike vacuum mode still free (VACUUM_NEXT); overdamped
-    roots keep theirs (a pair's two roots share one name).  Returns the modes whose family
-    changed (their exponent and fixed-frame fields are the caller's to update)."""
-    groups: dict = {}
-    for m in modes:
-        if m.vacuum_shares is not None and not m.overdamped:
-            groups.setdefault(m.symmetry, []).append(m)
-    changed = []
-    for group in groups.values():
-        named: dict = {}                 # vacuum mode -> modes named after it so far
-        for m in sorted(group, key=lambda m: -float(m.vacuum_shares.max())):
-            s = m.vacuum_shares
-            order = np.argsort(-s)
-            j = next((int(k) for k in order if k not in named
-                      and s[k] >= VACUUM_NEXT * s[order[0]]), int(order[0]))
-            named[j] = named.get(j, 0) + 1
-            m.duplicate = named[j] if named[j] > 1 else None
-            before = m.family
-            _name_after(m, reference, j, s)
-            if m.family != before:
-                changed.append(m)
-    return changed
-
-
 #: A mode is one of the blades' inflow states when its largest induction state exceeds this
 #: many times its largest structural motion as a fraction of the rotor radius.
 AERODYNAMIC_SHARE = 10.0
 #: ... or exceeds it once in a mode that does not oscillate: frequency within this fraction of
 #: the frame's base frequency from a multiple of it.
 NON_OSCILLATORY = 1e-3
-
-
-#: A second mode of one blade name in wind ('#2') whose tower holds at least this many times
-#: the blades' strain energy is the tower's (a tower bending mode whose long blades follow
-#: in a shape of their own: IEA 15-MW 1.78-1.84 Hz, 0.75-0.87 (its partner of the
-#: coupling, the 2nd collective lag at 2.6 Hz, 0.58-0.63, keeps its own name); NREL 5-MW
-#: near 3 Hz above 13 m/s, 0.76-0.80.  Only '#' modes: modes that are the first of their
-#: blade name reach 0.63 (that 2nd collective lag) and 1.03 (the NREL 5-MW's collective lag
-#: at 25 m/s, beside the 2nd fore-aft tower), most stay below 0.3.
-TOWER_HYBRID = 0.5
-
-
-def name_tower_hybrids(model: TurbineModel, fl, modes) -> list:
-    """The modes named '#2' (or later) after a vacuum blade mode (name_after_vacuum) whose
-    tower holds at least TOWER_HYBRID times their blades' strain energy become tower modes
-    (the direction of most of the tower's strain energy); returns them (their exponent and
-    fixed-frame fields are the caller's to update)."""
-    lay = model.layout
-    if not lay.has_tower:
-        return []
-    changed = []
-    for m in modes:
-        if not m.duplicate or m.vacuum_family is None:
-            continue
-        x = fl.eigenvectors[:, m.column]
-        t0 = lay.tower_offset
-        strain = classify_energy(model.tower, x[t0:t0 + model.tower.n])
-        blades = sum(m.participation[k] for k in STRAIN_KEYS)    # label_modes' count
-        if float(strain.sum()) >= TOWER_HYBRID * blades:
-            m.family, m.symmetry = "tower", _tower_motion(model, x, strain)[1]
-            m.blade_phase_deg = m.duplicate = None
-            m.vacuum_family = m.vacuum_index = m.vacuum_share = m.vacuum_shares = None
-            changed.append(m)
-    return changed
 
 
 def _aerodynamic_rows(model: TurbineModel):
@@ -663,6 +592,7 @@ def add_fixed_frame(model, transform, fl, modes, rows, wts):
         m.fixed_frame_damping_ratio = x["damping_ratio"]
         m.whirl = f.whirl
         m.cyclic_order = f.order
+        m.whirl_shares = dict(f.shares)
         # rigid-body, tower and drivetrain modes keep their own symmetry (a drivetrain mode
         # turns the rotor as a whole: its blades' residual whirl does not name it)
         if m.family not in ("yaw", "teeter", "tower", "aerodynamic", "drivetrain"):

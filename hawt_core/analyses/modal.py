@@ -49,8 +49,8 @@ from ..solvers.periodic import PeriodicSteadyState, periodic_steady_state
 from ..solvers.steady import constant_steady_state
 from .blade_reference import vacuum_blade_reference
 from .labels import (add_fixed_frame, aerodynamic_lags, exponent_fields, family_exponent,
-                     label_modes, mark_overdamped, name_after_vacuum, name_tower_hybrids,
-                     number_modes, separate_degenerate_modes)
+                     label_modes, mark_overdamped, number_modes, separate_degenerate_modes)
+from .wind_names import name_in_wind
 
 __all__ = ["modal_analysis", "periodic_dae", "validate_request", "Cancelled", "METHODS",
            "DEFAULT_STEPS", "DEFAULT_MAX_PER_REV", "STEPS_PER_CYCLE", "MIN_STEPS", "MAX_STEPS",
@@ -481,9 +481,7 @@ def _modal_analysis(turbine, elements, rotor_speed, steps, method, fast, harmoni
     mark_overdamped(modes)
     renamed = []
     if reference is not None:
-        renamed = name_after_vacuum(modes, reference)
-        renamed += [m for m in name_tower_hybrids(model, fl, modes)
-                    if all(m is not r for r in renamed)]
+        renamed = name_in_wind(model, fl, modes, reference)
     for m in renamed:
         # a new family: its own motion's dominant harmonic and whirl
         _family_exponent_fields(model, fl, m)

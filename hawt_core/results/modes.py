@@ -80,6 +80,11 @@ class Mode:
     #: mode's participation those states hold (0 to 1; above 1/2 the mode is theirs,
     #: family "aerodynamic"); None where not computed
     aerodynamic_share: Optional[float] = None
+    #: three or more blades: the blades' fixed-frame energy shares of each whirl class
+    #: (collective, forward, backward, differential; sum 1) at the mode's fixed-frame
+    #: frequency: a mode that mixes two (a collective and a backward-whirl lag mode coupled
+    #: through the tower) shows it here; None for one- and two-bladed rotors
+    whirl_shares: Optional[dict] = None
     #: the shares along every vacuum blade mode (the reference's order), for the naming
     vacuum_shares: Optional[np.ndarray] = field(default=None, repr=False, compare=False)
 
@@ -107,7 +112,8 @@ class Mode:
                 "whirl": self.whirl, "cyclic_order": self.cyclic_order,
                 "frequency_error": self.frequency_error, "overdamped": self.overdamped,
                 "vacuum_mode": self.vacuum_mode, "vacuum_share": self.vacuum_share,
-                "duplicate": self.duplicate, "aerodynamic_share": self.aerodynamic_share}
+                "duplicate": self.duplicate, "aerodynamic_share": self.aerodynamic_share,
+                "whirl_shares": self.whirl_shares}
 
 
 @dataclass
