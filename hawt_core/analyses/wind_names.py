@@ -184,8 +184,7 @@ def hand_over_blade_names(model: TurbineModel, fl, modes, reference) -> list:
         if not fits:
             continue
         d = max(fits, key=lambda f: f[0])[1]
-        left = sorted((m for m in named if m is not d and same_name(m, d)),
-                      key=lambda m: m.duplicate or 1)
+        left = sorted((m for m in named if m is not d and same_name(m, d)), key=_dealt)
         if d.whirl != h.whirl:
             eta = _nonnegative(complex(d.real_per_rev, d.fixed_frame_per_rev) * fl.omega
                                + 1j * _WHIRL_SHIFT[h.whirl] * fl.omega)
@@ -198,8 +197,8 @@ def hand_over_blade_names(model: TurbineModel, fl, modes, reference) -> list:
                  if fi == (h.vacuum_family, h.vacuum_index))
         _name_after(d, reference, j, d.vacuum_shares)
         d.duplicate = None
-        for k, m in enumerate(left, start=1):       # the name d leaves, renumbered
-            m.duplicate = k if k > 1 else None
+        for k, m in enumerate(left):                # the name d leaves, renumbered
+            m.duplicate = k + 1 if k else None
         h.family, h.symmetry = "tower", ratio[id(h)][1]
         h.blade_phase_deg = h.duplicate = None
         h.vacuum_family = h.vacuum_index = h.vacuum_share = h.vacuum_shares = None
