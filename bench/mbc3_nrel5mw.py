@@ -19,8 +19,10 @@ have no torsion degree of freedom (the "torsion flexible" column: hawt's full be
 bending-torsion coupling takes 8 % of the edgewise damping).  Differences that remain: hawt's
 blades are beams (the shapes follow the loads) where ElastoDyn has 3 assumed modes per blade
 (the collective edge with the free generator: one shape held, ElastoDyn's way, is an upper
-bound the beam's mode lies below; printed: the estimate with hawt's clamped lag shape and
-with ElastoDyn's own BldEdgSh polynomial, 2.283 Hz against OpenFAST's 2.256 Hz); hawt's
+bound the beam's mode lies below; printed: the Rayleigh-Ritz series in the clamped blade's
+modes, 2.257 Hz with ElastoDyn's degrees of freedom against OpenFAST's 2.256 Hz, 2.152 Hz
+with the 2nd edge shape and the 3rd flap, and the estimate with ElastoDyn's own BldEdgSh
+polynomial, 2.283 Hz); hawt's
 quasi-steady airfoil has no unsteady lift lag either way.
 
     .venv/bin/python bench/mbc3_nrel5mw.py [--quasi-steady-only]
@@ -124,41 +126,15 @@ def match(modes):
     return out
 
 
-def assumed_mode_estimate(t) -> tuple:
-    """(clamped collective lag [Hz], ElastoDyn-like estimate [Hz]) of the collective edge
-    with a free rotor: the clamped blade's first lag shape (hawt's blade modes at the rotor
-    speed) kept as the one edge shape, coupled to the rigid rotor's rotation (two degrees of
-    freedom, Rayleigh-Ritz: omega^2 = omega_c^2 / (1 - Nb S^2 / (J m_q)), S = int m r u2,
-    m_q = int m |u|^2, J the rotor's and the generator's inertia).  An upper bound of the
-    beam's own free-rotor mode, as ElastoDyn's assumed mode is."""
-    import numpy as np
-    from scipy.interpolate import CubicSpline
-    from hawt_core.analyses.blade_modes import blade_modes
-    lag = [m for m in blade_modes(t, rotor_speed=t.rotor.speed).modes if m.family == "lag"][0]
-    sh = lag.shape
-    x = np.asarray(sh["span"])
-    u = np.asarray(sh["displacement"])
-    fine = np.linspace(0.0, x[-1], 2001)
-    u2, u3 = (CubicSpline(x, u[:, k])(fine) for k in (1, 2))
-    sec = t.blade.sections
-    m = np.interp(fine / t.blade.length, sec.stations, sec.mass)
-    r = t.hub.radius + fine * np.cos(t.rotor.precone)
-    nb = t.rotor.blades
-    S = np.trapezoid(m * r * u2, fine)
-    mq = np.trapezoid(m * (u2 ** 2 + u3 ** 2), fine)
-    J = (nb * np.trapezoid(m * r ** 2, fine) + t.hub.inertia_longitudinal
-         + t.drivetrain.gearbox_ratio ** 2 * t.drivetrain.generator_inertia)
-    fc = lag.frequency_hz
-    return fc, fc / math.sqrt(1.0 - nb * S ** 2 / (J * mq))
-
-
 def elastodyn_shape_estimate(t) -> tuple:
     """(clamped [Hz], with the free rotor [Hz]) of the collective edge with ElastoDyn's own
     assumed edge shape: the deck's BldEdgSh polynomial phi (NRELOffshrBsline5MW_Blade.dat),
     the clamped frequency by its Rayleigh quotient (EI_edge phi''^2, the centrifugal tension
     T phi'^2, the in-plane softening -Omega^2 m phi^2, over m phi^2), then coupled to the
-    rigid rotor as assumed_mode_estimate does.  If it lands near OpenFAST's, the row's
-    difference is ElastoDyn's shape, not the physics both codes share."""
+    rigid rotor (two degrees of freedom, Rayleigh-Ritz: omega^2 = omega_c^2 / (1 - Nb S^2 /
+    (J m_q)), S = int m r phi, m_q = int m phi^2, J the rotor's and the generator's
+    inertia).  If it lands near OpenFAST's, the row's difference is ElastoDyn's shape, not
+    the physics both codes share."""
     import re
     import numpy as np
     blade = DECK.parents[1] / "5MW_Baseline" / "NRELOffshrBsline5MW_Blade.dat"
@@ -211,9 +187,14 @@ def main():
         torque = r.settings.get("generator_torque")
         print(f"hawt, {name}: {dt:.1f} s"
               + (f"; generator torque trimmed to {torque:.6g} N m (HSS)" if torque else ""))
-    fc, est = assumed_mode_estimate(case(generator="free", upright=True))
-    print(f"collective edge with a free rotor, the clamped lag shape ({fc:.4f} Hz) kept as "
-          f"ElastoDyn keeps its assumed mode: {est:.4f} Hz (an upper bound of the beam's)")
+    # the Rayleigh-Ritz series of tests/test_generator_trim.py (rigid rotor + the clamped
+    # blade's modes): ElastoDyn's degrees of freedom, then more shapes
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+    from test_generator_trim import ritz_free_rotor_edge
+    ritz = ritz_free_rotor_edge(case(generator="free", upright=True, damped=False), 5)
+    print(f"collective edge with a free rotor, Rayleigh-Ritz in the clamped blade's modes: "
+          f"ElastoDyn's set (1st, 2nd flap, one edge) {ritz[2]:.4f} Hz, + the 2nd edge "
+          f"{ritz[3]:.4f} Hz, + the 3rd flap {ritz[4]:.4f} Hz (an upper bound of the beam's)")
     fe, ed = elastodyn_shape_estimate(case(generator="free", upright=True))
     print(f"the same with ElastoDyn's own edge shape (BldEdgSh; clamped {fe:.4f} Hz): "
           f"{ed:.4f} Hz (OpenFAST {OPENFAST['1st edge collective (generator)'][0]:.4f} Hz)")
