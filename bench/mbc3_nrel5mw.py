@@ -191,10 +191,15 @@ def main():
     # blade's modes): ElastoDyn's degrees of freedom, then more shapes
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
     from test_generator_trim import ritz_free_rotor_edge
-    ritz = ritz_free_rotor_edge(case(generator="free", upright=True, damped=False), 5)
-    print(f"collective edge with a free rotor, Rayleigh-Ritz in the clamped blade's modes: "
-          f"ElastoDyn's set (1st, 2nd flap, one edge) {ritz[2]:.4f} Hz, + the 2nd edge "
-          f"{ritz[3]:.4f} Hz, + the 3rd flap {ritz[4]:.4f} Hz (an upper bound of the beam's)")
+    free = case(generator="free", upright=True, damped=False)
+    blade_zeta = case().blade.damping.modal["edge"][0]        # the deck's, every blade mode
+    ritz, zeta = ritz_free_rotor_edge(free, 5, blade_zeta=blade_zeta,
+                                      torque_slope=free.drivetrain.generator_torque_slope)
+    print(f"collective edge with a free rotor, Rayleigh-Ritz in the clamped blade's modes "
+          f"(no air; the blades' {100 * blade_zeta:.4g} % and the torque law's slope): "
+          f"ElastoDyn's set (1st, 2nd flap, one edge) {ritz[2]:.4f} Hz / {zeta[2]:.5f}, + "
+          f"the 2nd edge {ritz[3]:.4f} Hz / {zeta[3]:.5f}, + the 3rd flap {ritz[4]:.4f} Hz / "
+          f"{zeta[4]:.5f} (the frequency an upper bound of the beam's)")
     fe, ed = elastodyn_shape_estimate(case(generator="free", upright=True))
     print(f"the same with ElastoDyn's own edge shape (BldEdgSh; clamped {fe:.4f} Hz): "
           f"{ed:.4f} Hz (OpenFAST {OPENFAST['1st edge collective (generator)'][0]:.4f} Hz)")
