@@ -67,6 +67,8 @@ def label_modes(model: TurbineModel, fl, columns, reference=None, participation=
     r_g = float(np.sqrt(np.mean(sec.i1) / np.mean(sec.mass)))  # torsion radius of gyration
     nb = model.n_blades
     pos = {int(r): j for j, r in enumerate(fl.sample_rows)}
+    # the blades' aerodynamic states' rows, once for every mode
+    aero_rows = _aerodynamic_rows(model) if getattr(model, "n_aero", 0) else None
     modes = []
     for i in columns:
         x = fl.eigenvectors[:, i]
@@ -119,9 +121,9 @@ def label_modes(model: TurbineModel, fl, columns, reference=None, participation=
             else:
                 rig_name = ("teeter" if rigid.get("teeter", 0.0) >= 0.25 * rigid.get("yaw", 0.0)
                             else "yaw")
-        aero_shares = _aerodynamic_shares(model, None if participation is None
+        aero_shares = _aerodynamic_shares(aero_rows, None if participation is None
                                           else participation[:, i])
-        aero_kind = _aerodynamic_state(model, fl, i, x, aero_shares)
+        aero_kind = _aerodynamic_state(model, fl, i, x, aero_shares, aero_rows)
         if aero_kind is not None:        # the blades' inflow or lag states, not a structure's
             rig_name = "aerodynamic"
             family, symmetry, phase = "aerodynamic", aero_kind, None
@@ -185,17 +187,17 @@ def _aerodynamic_rows(model: TurbineModel):
             rows([n for n in names if n.startswith("alpha")]))
 
 
-def _aerodynamic_sizes(model: TurbineModel, X):
+def _aerodynamic_sizes(model: TurbineModel, X, aero_rows=None):
     """(inflow, airfoil, structure) of the eigenvectors X (n, m) or x (n,): the largest
     induction state (dimensionless), the largest lag state (rad) and the largest structural
     motion as a fraction of the rotor radius (display rows: elastic and rigid tip metres
-    over R), per column."""
+    over R), per column; ``aero_rows``: _aerodynamic_rows(model), if at hand."""
     X = np.asarray(X)
 
     def largest(rows):
         return np.abs(X[rows]).max(axis=0) if rows.size else np.zeros(X.shape[1:])
 
-    inflow, airfoil = _aerodynamic_rows(model)
+    inflow, airfoil = _aerodynamic_rows(model) if aero_rows is None else aero_rows
     rows, wts = model.display_rows()
     R = model.turbine.hub.radius + model.turbine.blade.length
     W = wts if X.ndim == 1 else wts[:, None]
@@ -207,33 +209,36 @@ def _aerodynamic_sizes(model: TurbineModel, X):
 AERODYNAMIC_PARTICIPATION = 0.5
 
 
-def _aerodynamic_shares(model: TurbineModel, participation) -> Optional[dict]:
-    """{"inflow", "airfoil"}: the blades' induction and lag states' shares of a mode's
-    ``participation`` (n,); None without one (or without aerodynamic states)."""
-    if participation is None or not getattr(model, "n_aero", 0) \
+def _aerodynamic_shares(aero_rows, participation) -> Optional[dict]:
+    """{"inflow", "airfoil"}: the blades' induction and lag states' (``aero_rows``:
+    _aerodynamic_rows) shares of a mode's ``participation`` (n,); None without one (or
+    without aerodynamic states: ``aero_rows`` None)."""
+    if participation is None or aero_rows is None \
             or not np.all(np.isfinite(participation)):
         return None
     return {kind: float(participation[rows].sum())
-            for kind, rows in zip(("inflow", "airfoil"), _aerodynamic_rows(model))}
+            for kind, rows in zip(("inflow", "airfoil"), aero_rows)}
 
 
-def _aerodynamic_state(model: TurbineModel, fl, i: int, x, shares=None) -> Optional[str]:
+def _aerodynamic_state(model: TurbineModel, fl, i: int, x, shares=None,
+                       aero_rows=None) -> Optional[str]:
     """"inflow" or "airfoil" for a mode of the blades' aerodynamic states (assembly/
     rotor_aero.py: Oye's inflow, Jones's lag), else None.  With their ``shares`` of the
     mode's participation (_aerodynamic_shares): they hold more than
     AERODYNAMIC_PARTICIPATION of it (scale-free: a heavily damped root where a lag and the
-    flap it drags mix is named after the one its eigenvalue belongs to most).  Without: the largest induction state of its
-    vector (dimensionless) exceeds AERODYNAMIC_SHARE times its largest structural motion as
-    a fraction of the rotor radius (elastic and rigid tip metres over R), or the largest
-    aerodynamic state (inductions, lag angles in rad) exceeds that motion in a
-    non-oscillatory mode (an inflow mode with the flap it drags).  Named by the state group
-    that moves (or participates) most."""
+    flap it drags mix is named after the one its eigenvalue belongs to most).  Without: the
+    largest induction state of its vector (dimensionless) exceeds AERODYNAMIC_SHARE times
+    its largest structural motion as a fraction of the rotor radius (elastic and rigid tip
+    metres over R), or the largest aerodynamic state (inductions, lag angles in rad)
+    exceeds that motion in a non-oscillatory mode (an inflow mode with the flap it drags).
+    Named by the state group that moves (or participates) most; ``aero_rows``:
+    _aerodynamic_rows(model), if at hand."""
     if not getattr(model, "n_aero", 0):
         return None
     if shares is not None:
         kind = max(shares, key=shares.get)
         return kind if sum(shares.values()) > AERODYNAMIC_PARTICIPATION else None
-    inflow, airfoil, structure = (float(v) for v in _aerodynamic_sizes(model, x))
+    inflow, airfoil, structure = (float(v) for v in _aerodynamic_sizes(model, x, aero_rows))
     size = {"inflow": inflow, "airfoil": airfoil}
     kind = max(size, key=size.get)
     # the inflow states alone: the lag states of a structural mode follow its section

@@ -17,7 +17,7 @@ from .labels import (STRAIN_KEYS, _blade_symmetry, _name_after, _natural, _nonne
                      _tower_motion, exponent_fields)
 
 __all__ = ["name_in_wind", "name_after_vacuum", "hand_over_blade_names", "name_tower_hybrids",
-           "promote_second_modes", "VACUUM_NEXT", "NEAR_CRITICAL", "TOWER_HYBRID",
+           "promote_second_modes", "tower_shares", "VACUUM_NEXT", "NEAR_CRITICAL", "TOWER_HYBRID",
            "WHIRL_TAKEN"]
 
 
@@ -26,8 +26,9 @@ def name_in_wind(model: TurbineModel, fl, modes, reference) -> list:
     overdamped roots marked); returns the modes whose family changed (their exponent and
     fixed-frame fields are the caller's to update)."""
     renamed = name_after_vacuum(modes, reference)
-    for m in (hand_over_blade_names(model, fl, modes, reference)
-              + name_tower_hybrids(model, fl, modes)):
+    towers = tower_shares(model, fl, modes)          # once: the renaming leaves them as they are
+    for m in (hand_over_blade_names(model, fl, modes, reference, towers)
+              + name_tower_hybrids(model, fl, modes, towers)):
         if all(m is not r for r in renamed):
             renamed.append(m)
     promote_second_modes(modes, reference)
@@ -92,35 +93,48 @@ def name_after_vacuum(modes, reference) -> list:
 TOWER_HYBRID = 0.5
 
 
-def name_tower_hybrids(model: TurbineModel, fl, modes) -> list:
+def name_tower_hybrids(model: TurbineModel, fl, modes, towers=None) -> list:
     """The modes named '#2' (or later) after a vacuum blade mode (name_after_vacuum) whose
     tower holds at least TOWER_HYBRID times their blades' strain energy become tower modes
     (the direction of most of the tower's strain energy); returns them (their exponent and
-    fixed-frame fields are the caller's to update)."""
-    lay = model.layout
-    if not lay.has_tower:
+    fixed-frame fields are the caller's to update).  ``towers``: tower_shares', if at
+    hand."""
+    if not model.layout.has_tower:
         return []
+    towers = tower_shares(model, fl, modes) if towers is None else towers
     changed = []
     for m in modes:
-        if not m.duplicate or m.vacuum_family is None:
-            continue
-        ratio, direction = _tower_over_blades(model, fl, m)
-        if ratio >= TOWER_HYBRID:
-            m.family, m.symmetry = "tower", direction
-            m.blade_phase_deg = m.duplicate = None
-            m.vacuum_family = m.vacuum_index = m.vacuum_share = m.vacuum_shares = None
+        if m.duplicate and m.vacuum_family is not None \
+                and towers[m.column][0] >= TOWER_HYBRID:
+            _make_tower(m, towers[m.column][1])
             changed.append(m)
     return changed
 
 
-def _tower_over_blades(model: TurbineModel, fl, m: Mode):
-    """(tower strain energy / the blades', the tower's direction) of mode ``m`` (label_modes'
-    blade energies, Mode.participation)."""
-    x = fl.eigenvectors[:, m.column]
+def tower_shares(model: TurbineModel, fl, modes) -> dict:
+    """{column: (tower strain energy / the blades', the tower's direction)} of the modes
+    named after a vacuum blade mode (label_modes' blade energies, Mode.participation);
+    empty without a tower."""
+    if not model.layout.has_tower:
+        return {}
     t0 = model.layout.tower_offset
-    strain = classify_energy(model.tower, x[t0:t0 + model.tower.n])
-    blades = sum(m.participation[k] for k in STRAIN_KEYS)
-    return float(strain.sum()) / max(blades, 1e-300), _tower_motion(model, x, strain)[1]
+    out = {}
+    for m in modes:
+        if m.vacuum_family is None:
+            continue
+        x = fl.eigenvectors[:, m.column]
+        strain = classify_energy(model.tower, x[t0:t0 + model.tower.n])
+        blades = sum(m.participation[k] for k in STRAIN_KEYS)
+        out[m.column] = (float(strain.sum()) / max(blades, 1e-300),
+                         _tower_motion(model, x, strain)[1])
+    return out
+
+
+def _make_tower(m: Mode, direction: str) -> None:
+    """Name the mode ``m`` a tower mode of ``direction``, no longer a blade mode."""
+    m.family, m.symmetry = "tower", direction
+    m.blade_phase_deg = m.duplicate = None
+    m.vacuum_family = m.vacuum_index = m.vacuum_share = m.vacuum_shares = None
 
 
 #: A mode of a whirl that two modes of one vacuum blade mode share may take another whirl of
@@ -133,7 +147,7 @@ WHIRL_TAKEN = 0.25
 _WHIRL_SHIFT = {"collective": 0, "differential": 0, "backward": 1, "forward": -1}
 
 
-def hand_over_blade_names(model: TurbineModel, fl, modes, reference) -> list:
+def hand_over_blade_names(model: TurbineModel, fl, modes, reference, towers=None) -> list:
     """A mode named after a vacuum blade mode (name_after_vacuum, not a '#2') whose tower
     holds at least TOWER_HYBRID times its blades' strain energy hands the name to a blade
     mode (tower below TOWER_HYBRID) the name fits, and becomes the tower's (its tower's
@@ -154,22 +168,23 @@ def hand_over_blade_names(model: TurbineModel, fl, modes, reference) -> list:
     its blades swinging collectively in the 1st lag's shape (tower/blades 0.83), takes the
     collective name; and a heavily damped 2nd flap mode whose blades bend like the 1st flap
     (1.15 Hz, damping 0.28) is the 1st flap's '#2' while the 2nd fore-aft tower bending
-    (1.89 Hz, tower/blades 0.90) takes the 2nd flap's name."""
+    (1.89 Hz, tower/blades 0.90) takes the 2nd flap's name.  ``towers``: tower_shares', if
+    at hand."""
     if not model.layout.has_tower:
         return []
     nb = model.n_blades
     named = [m for m in modes if m.vacuum_family is not None and not m.overdamped]
-    ratio = {id(m): _tower_over_blades(model, fl, m) for m in named}
+    towers = tower_shares(model, fl, modes) if towers is None else towers
 
     def same_name(m, d):
         return (m.vacuum_family, m.vacuum_index, m.symmetry) == \
             (d.vacuum_family, d.vacuum_index, d.symmetry)
 
     changed = []
-    for h in sorted(named, key=lambda m: -ratio[id(m)][0]):
-        if h.duplicate or ratio[id(h)][0] < TOWER_HYBRID:
+    for h in sorted(named, key=lambda m: -towers[m.column][0]):
+        if h.duplicate or towers[h.column][0] < TOWER_HYBRID:
             continue
-        blades = [d for d in named if d is not h and ratio[id(d)][0] < TOWER_HYBRID
+        blades = [d for d in named if d is not h and towers[d.column][0] < TOWER_HYBRID
                   and all(d is not c for c in changed)]
         fits = [(_natural(d), d) for d in blades
                 if d.duplicate and d.vacuum_family == h.vacuum_family
@@ -193,17 +208,19 @@ def hand_over_blade_names(model: TurbineModel, fl, modes, reference) -> list:
             d.blade_phase_deg = _blade_symmetry(model, fl, d.column, eta)[1]
             d.whirl, d.cyclic_order = h.whirl, h.cyclic_order
         d.symmetry = h.symmetry
-        j = next(k for k, fi in enumerate(zip(reference.families, reference.indices))
-                 if fi == (h.vacuum_family, h.vacuum_index))
-        _name_after(d, reference, j, d.vacuum_shares)
+        _name_after(d, reference, _positions(reference)[(h.vacuum_family, h.vacuum_index)],
+                    d.vacuum_shares)
         d.duplicate = None
         for k, m in enumerate(left):                # the name d leaves, renumbered
             m.duplicate = k + 1 if k else None
-        h.family, h.symmetry = "tower", ratio[id(h)][1]
-        h.blade_phase_deg = h.duplicate = None
-        h.vacuum_family = h.vacuum_index = h.vacuum_share = h.vacuum_shares = None
+        _make_tower(h, towers[h.column][1])
         changed.append(h)
     return changed
+
+
+def _positions(reference) -> dict:
+    """{(family, index): position in ``reference``} of its vacuum blade modes."""
+    return {fi: j for j, fi in enumerate(zip(reference.families, reference.indices))}
 
 
 def _natural_hz(m: Mode) -> float:
@@ -227,7 +244,7 @@ def promote_second_modes(modes, reference) -> None:
     tried: at 10 m/s it set two forward-whirl flap modes in their tracks' order, above 12 m/s
     it put the 2nd flap's name on the '#2' track: damping 0.27 against 0.74, natural
     frequencies 1.68 and 2.07 Hz.)"""
-    where = {fi: j for j, fi in enumerate(zip(reference.families, reference.indices))}
+    where = _positions(reference)
     groups: dict = {}
     for m in modes:
         if m.vacuum_family is not None and not m.overdamped:
